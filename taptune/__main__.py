@@ -1,0 +1,3 @@
+from taptune.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,473 @@
+"""Assembly files (TOML, mm at the boundary) and the SI geometry they describe.
+
+An assembly is one tool clamped in one holder at one stick-out (ASSEMBLY-FORMAT.md).
+:func:`load_assembly` parses and validates a file; every malformed or impossible file
+raises :class:`~taptune.errors.InputError` naming the file, the key and the problem.
+Inside, everything is SI (m, Pa, kg/m³); :func:`assembly_to_toml` writes mm again.
+
+Axial coordinate z [m]: 0 at the spindle-side end of the holder, the holder front face
+at ``holder.length``, the tool tip at ``holder.length + stickout``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from taptune.errors import InputError
+
+MM = 1e-3
+GPA = 1e9
+# Geometry comparisons (fits, equal lengths) are made to this tolerance [m].
+TOL_M = 1e-8
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic material: density [kg/m³], Young's modulus [Pa], Poisson ratio, loss factor."""
+
+    density: float
+    youngs_modulus: float
+    poisson: float
+    loss_factor: float
+
+
+STEEL = Material(density=7800.0, youngs_modulus=210e9, poisson=0.29, loss_factor=0.003)
+CARBIDE = Material(density=15600.0, youngs_modulus=580e9, poisson=0.22, loss_factor=0.002)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A coaxial cylinder: length, outer and inner diameter [m] (inner 0 = solid)."""
+
+    length: float
+    od: float
+    id: float = 0.0
+
+
+@dataclass(frozen=True)
+class Holder:
+    """Tool holder: segments from the spindle-side end (z = 0) to the front face."""
+
+    name: str
+    interface: str
+    clamp_length: float
+    segments: tuple[Segment, ...]
+    material: Material = STEEL
+
+    @property
+    def length(self) -> float:
+        """Holder length L_h [m] (z of the front face)."""
+        return float(sum(s.length for s in self.segments))
+
+    def breakpoints(self) -> list[float]:
+        """z of every segment boundary, 0 … L_h [m]."""
+        z = [0.0]
+        for s in self.segments:
+            z.append(z[-1] + s.length)
+        return z
+
+
+@dataclass(frozen=True)
+class Tool:
+    """Solid tool: segments from the shank (back) end to the tip [m].
+
+    ``shank_diameter``/``flute_*`` are kept when the file gave them (for display and for
+    re-writing the file); the model only uses ``segments``.
+    """
+
+    name: str
+    total_length: float
+    segments: tuple[Segment, ...]
+    material: Material = CARBIDE
+    shank_diameter: float | None = None
+    flute_length: float | None = None
+    flute_diameter: float | None = None
+    flute_ratio: float | None = None
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """One tool in one holder at one stick-out [m]. ``source`` names the file for messages."""
+
+    holder: Holder
+    tool: Tool
+    stickout: float
+    source: str = "<assembly>"
+    warnings: tuple[str, ...] = field(default=(), compare=False)
+
+    @property
+    def inserted_length(self) -> float:
+        """L_in = L_tool − stickout [m]."""
+        return self.tool.total_length - self.stickout
+
+    @property
+    def contact_length(self) -> float:
+        """L_c = min(L_in, clamp_length) [m]."""
+        return min(self.inserted_length, self.holder.clamp_length)
+
+    @property
+    def z_contact_start(self) -> float:
+        """z_c0 = L_h − L_c, the deep (spindle-side) end of the contact zone [m]."""
+        return self.holder.length - self.contact_length
+
+    @property
+    def z_tool_start(self) -> float:
+        """z of the tool's back end [m]."""
+        return self.holder.length - self.inserted_length
+
+    @property
+    def z_tip(self) -> float:
+        """z of the tool tip [m]."""
+        return self.holder.length + self.stickout
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of holder plus tool with nominal densities [kg]."""
+        def mass(segments, rho):
+            return sum(rho * math.pi / 4 * (s.od**2 - s.id**2) * s.length for s in segments)
+
+        return mass(self.holder.segments, self.holder.material.density) + mass(
+            self.tool.segments, self.tool.material.density
+        )
+
+    def with_stickout(self, stickout: float) -> "Assembly":
+        """The same holder and tool at another stick-out [m], validated."""
+        return validate(replace(self, stickout=float(stickout), warnings=()))
+
+    def with_holder(self, holder: Holder) -> "Assembly":
+        """The same tool and stick-out in another holder, validated."""
+        return validate(replace(self, holder=holder, warnings=()))
+
+    def tool_diameter_at(self, z: float) -> float:
+        """Outer diameter of the tool at axial position z [m] (0 outside the tool)."""
+        zz = self.z_tool_start
+        for s in self.tool.segments:
+            if zz - TOL_M <= z <= zz + s.length + TOL_M:
+                return s.od
+            zz += s.length
+        return 0.0
+
+
+def validate(asm: Assembly) -> Assembly:
+    """Check the geometry rules of ASSEMBLY-FORMAT.md / MODEL.md §1.3.
+
+    Returns the assembly with its ``warnings`` filled in; raises InputError on an
+    impossible geometry.
+    """
+    src = asm.source
+    h, t = asm.holder, asm.tool
+
+    def fail(key: str, problem: str):
+        raise InputError(f"{src}: {key} {problem}")
+
+    if not h.segments:
+        fail("[holder] segments", "must list at least one segment")
+    for label, segs in (("[holder] segments", h.segments), ("[tool] segments", t.segments)):
+        for i, s in enumerate(segs, 1):
+            for name, value in (("length", s.length), ("od", s.od)):
+                if not (math.isfinite(value) and value > 0):
+                    fail(f"{label}[{i}].{name}", f"must be > 0 mm, got {value / MM:g}")
+            if not (math.isfinite(s.id) and s.id >= 0):
+                fail(f"{label}[{i}].id", f"must be >= 0 mm, got {s.id / MM:g}")
+            if s.id >= s.od:
+                fail(f"{label}[{i}].id", f"must be smaller than od ({s.od / MM:g} mm), got {s.id / MM:g}")
+    for key, value in (
+        ("[holder] clamp_length", h.clamp_length),
+        ("[tool] total_length", t.total_length),
+        ("[setup] stickout", asm.stickout),
+    ):
+        if not (math.isfinite(value) and value > 0):
+            fail(key, f"must be > 0 mm, got {value / MM:g}")
+    for key, m in (("[holder] material", h.material), ("[tool] material", t.material)):
+        if not (m.density > 0 and math.isfinite(m.density)):
+            fail(f"{key}.density", f"must be > 0 kg/m³, got {m.density:g}")
+        if not (m.youngs_modulus > 0 and math.isfinite(m.youngs_modulus)):
+            fail(f"{key}.youngs_modulus", f"must be > 0 GPa, got {m.youngs_modulus / GPA:g}")
+        if not (-1.0 < m.poisson < 0.5):
+            fail(f"{key}.poisson", f"must lie in (-1, 0.5), got {m.poisson:g}")
+        if not (0 <= m.loss_factor < 1):
+            fail(f"{key}.loss_factor", f"must lie in [0, 1), got {m.loss_factor:g}")
+    seg_sum = sum(s.length for s in t.segments)
+    if abs(seg_sum - t.total_length) > 0.01 * MM + TOL_M:
+        fail("[tool] total_length", f"is {t.total_length / MM:g} mm but the tool segments add up to {seg_sum / MM:g} mm")
+    if asm.stickout >= t.total_length - TOL_M:
+        fail("[setup] stickout", f"({asm.stickout / MM:g} mm) must be shorter than the tool ({t.total_length / MM:g} mm)")
+    if asm.inserted_length > h.length + TOL_M:
+        fail("[setup] stickout", f"leaves {asm.inserted_length / MM:g} mm of tool inside a holder only {h.length / MM:g} mm long")
+    if h.clamp_length > h.length + TOL_M:
+        fail("[holder] clamp_length", f"({h.clamp_length / MM:g} mm) is longer than the holder ({h.length / MM:g} mm)")
+
+    warnings: list[str] = []
+    # The tool must fit the bore along the whole inserted length.
+    z_back, L_h = asm.z_tool_start, h.length
+    zb = 0.0
+    for i, hs in enumerate(h.segments, 1):
+        za, zb = zb, zb + hs.length
+        lo, hi = max(za, z_back), min(zb, L_h)
+        if hi - lo <= TOL_M:
+            continue
+        zt = z_back
+        for ts in t.segments:
+            ta, tb = zt, zt + ts.length
+            zt = tb
+            if min(tb, hi) - max(ta, lo) <= TOL_M:
+                continue
+            if ts.od > hs.id + TOL_M:
+                fail(
+                    f"[holder] segments[{i}].id",
+                    f"= {hs.id / MM:g} mm is smaller than the tool ({ts.od / MM:g} mm) inserted there: the tool cannot fit",
+                )
+            if ts.od < hs.id - TOL_M and min(tb, hi) > asm.z_contact_start + TOL_M:
+                warnings.append(
+                    f"{src}: bore {hs.id / MM:g} mm is larger than the tool ({ts.od / MM:g} mm) in the contact zone: "
+                    "a collet or sleeve is implied"
+                )
+    if t.flute_length is not None and t.flute_length > asm.stickout + TOL_M:
+        warnings.append(
+            f"{src}: the flutes ({t.flute_length / MM:g} mm) reach {(t.flute_length - asm.stickout) / MM:g} mm into the holder"
+        )
+    return replace(asm, warnings=tuple(dict.fromkeys(warnings)))
+
+
+# --------------------------------------------------------------------------- parsing
+
+
+class _Reader:
+    """Typed access to a TOML table with messages that name the file and the key."""
+
+    def __init__(self, src: str):
+        self.src = src
+
+    def fail(self, key: str, problem: str):
+        raise InputError(f"{self.src}: {key} {problem}")
+
+    def table(self, data: dict, key: str, where: str = "") -> dict:
+        if key not in data:
+            self.fail(f"[{key}]" if not where else f"{where} {key}", "is missing")
+        value = data[key]
+        if not isinstance(value, dict):
+            self.fail(f"[{key}]" if not where else f"{where} {key}", "must be a table")
+        return value
+
+    def number(self, data: dict, key: str, where: str, default: float | None = None) -> float:
+        if key not in data:
+            if default is not None:
+                return float(default)
+            self.fail(f"{where} {key}", "is missing")
+        value = data[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(f"{where} {key}", f"must be a number, got {value!r}")
+        if not math.isfinite(value):
+            self.fail(f"{where} {key}", f"must be a finite number, got {value!r}")
+        return float(value)
+
+    def text(self, data: dict, key: str, where: str, default: str | None = None) -> str:
+        if key not in data:
+            if default is not None:
+                return default
+            self.fail(f"{where} {key}", "is missing")
+        value = data[key]
+        if not isinstance(value, str) or not value.strip():
+            self.fail(f"{where} {key}", f"must be a non-empty string, got {value!r}")
+        return value.strip()
+
+    def material(self, data: dict, where: str, default: Material) -> Material:
+        if "material" not in data:
+            return default
+        m = data["material"]
+        if not isinstance(m, dict):
+            self.fail(f"{where} material", "must be a table")
+        w = f"{where} material."
+        return Material(
+            density=self.number(m, "density", w, default.density),
+            youngs_modulus=self.number(m, "youngs_modulus", w, default.youngs_modulus / GPA) * GPA,
+            poisson=self.number(m, "poisson", w, default.poisson),
+            loss_factor=self.number(m, "loss_factor", w, default.loss_factor),
+        )
+
+    def segments(self, data: dict, where: str) -> tuple[Segment, ...]:
+        segs = data.get("segments")
+        if not isinstance(segs, list) or not segs:
+            self.fail(f"{where} segments", "must be a non-empty array of {length, od, id} tables")
+        out = []
+        for i, s in enumerate(segs, 1):
+            w = f"{where} segments[{i}]"
+            if not isinstance(s, dict):
+                self.fail(w, "must be a table {length, od, id}")
+            out.append(
+                Segment(
+                    length=self.number(s, "length", w + ".") * MM,
+                    od=self.number(s, "od", w + ".") * MM,
+                    id=self.number(s, "id", w + ".", 0.0) * MM,
+                )
+            )
+        return tuple(out)
+
+
+def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
+    """Build a validated :class:`Assembly` from TOML data (mm, GPa)."""
+    r = _Reader(source)
+    if not isinstance(data, dict):
+        r.fail("", "must be a TOML table")
+    h = r.table(data, "holder")
+    t = r.table(data, "tool")
+    s = r.table(data, "setup")
+    holder = Holder(
+        name=r.text(h, "name", "[holder]"),
+        interface=r.text(h, "interface", "[holder]", "unknown"),
+        clamp_length=r.number(h, "clamp_length", "[holder]") * MM,
+        segments=r.segments(h, "[holder]"),
+        material=r.material(h, "[holder]", STEEL),
+    )
+    total = r.number(t, "total_length", "[tool]") * MM
+    if "segments" in t:
+        tool = Tool(
+            name=r.text(t, "name", "[tool]", "tool"),
+            total_length=total,
+            segments=r.segments(t, "[tool]"),
+            material=r.material(t, "[tool]", CARBIDE),
+        )
+    else:
+        shank = r.number(t, "shank_diameter", "[tool]") * MM
+        flute_len = r.number(t, "flute_length", "[tool]") * MM
+        flute_d = r.number(t, "flute_diameter", "[tool]") * MM
+        ratio = r.number(t, "flute_ratio", "[tool]", 0.8)
+        for key, v in (("shank_diameter", shank), ("flute_length", flute_len), ("flute_diameter", flute_d)):
+            if v <= 0:
+                r.fail(f"[tool] {key}", f"must be > 0 mm, got {v / MM:g}")
+        if not 0 < ratio <= 1.5:
+            r.fail("[tool] flute_ratio", f"must lie in (0, 1.5], got {ratio:g}")
+        if flute_len >= total - TOL_M:
+            r.fail("[tool] flute_length", f"({flute_len / MM:g} mm) must be shorter than total_length ({total / MM:g} mm)")
+        tool = Tool(
+            name=r.text(t, "name", "[tool]", "tool"),
+            total_length=total,
+            segments=(Segment(total - flute_len, shank), Segment(flute_len, ratio * flute_d)),
+            material=r.material(t, "[tool]", CARBIDE),
+            shank_diameter=shank,
+            flute_length=flute_len,
+            flute_diameter=flute_d,
+            flute_ratio=ratio,
+        )
+    stickout = r.number(s, "stickout", "[setup]") * MM
+    return validate(Assembly(holder=holder, tool=tool, stickout=stickout, source=source))
+
+
+def load_assembly(path: str | Path) -> Assembly:
+    """Read and validate an assembly TOML file (ASSEMBLY-FORMAT.md)."""
+    path = Path(path)
+    name = str(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{name}: is a folder, not an assembly file") from None
+    except OSError as err:
+        raise InputError(f"{name}: cannot read ({err.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{name}: not a UTF-8 text file (an assembly file is TOML)") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise InputError(f"{name}: not valid TOML ({err})") from None
+    return parse_assembly(data, name)
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.6g}" if "e" not in f"{x:.6g}" else repr(float(x))
+
+
+def _seg_lines(segments) -> str:
+    return "\n".join(
+        f"  {{ length = {_fmt(s.length / MM)}, od = {_fmt(s.od / MM)}, id = {_fmt(s.id / MM)} }},"
+        for s in segments
+    )
+
+
+def _material_line(m: Material) -> str:
+    return (
+        f"material = {{ density = {_fmt(m.density)}, youngs_modulus = {_fmt(m.youngs_modulus / GPA)}, "
+        f"poisson = {_fmt(m.poisson)}, loss_factor = {_fmt(m.loss_factor)} }}"
+    )
+
+
+def _toml_str(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def holder_to_toml(holder: Holder) -> str:
+    """The ``[holder]`` table of an assembly file (mm, GPa)."""
+    return (
+        "[holder]\n"
+        f"name = {_toml_str(holder.name)}\n"
+        f"interface = {_toml_str(holder.interface)}\n"
+        f"clamp_length = {_fmt(holder.clamp_length / MM)}\n"
+        f"{_material_line(holder.material)}\n"
+        f"segments = [\n{_seg_lines(holder.segments)}\n]\n"
+    )
+
+
+def tool_to_toml(tool: Tool) -> str:
+    """The ``[tool]`` table of an assembly file (mm, GPa)."""
+    out = f"[tool]\nname = {_toml_str(tool.name)}\n{_material_line(tool.material)}\n"
+    out += f"total_length = {_fmt(tool.total_length / MM)}\n"
+    if tool.shank_diameter is not None:
+        out += (
+            f"shank_diameter = {_fmt(tool.shank_diameter / MM)}\n"
+            f"flute_length = {_fmt(tool.flute_length / MM)}\n"
+            f"flute_diameter = {_fmt(tool.flute_diameter / MM)}\n"
+            f"flute_ratio = {_fmt(tool.flute_ratio)}\n"
+        )
+    else:
+        out += f"segments = [\n{_seg_lines(tool.segments)}\n]\n"
+    return out
+
+
+def assembly_to_toml(asm: Assembly) -> str:
+    """An assembly file that :func:`load_assembly` reads back to the same geometry."""
+    return (
+        holder_to_toml(asm.holder)
+        + "\n"
+        + tool_to_toml(asm.tool)
+        + f"\n[setup]\nstickout = {_fmt(asm.stickout / MM)}\n"
+    )
+
+
+def holder_to_dict(holder: Holder) -> dict:
+    """Holder geometry as plain JSON-able data (mm, GPa), for the holder library."""
+    m = holder.material
+    return {
+        "name": holder.name,
+        "interface": holder.interface,
+        "clamp_length": holder.clamp_length / MM,
+        "material": {
+            "density": m.density,
+            "youngs_modulus": m.youngs_modulus / GPA,
+            "poisson": m.poisson,
+            "loss_factor": m.loss_factor,
+        },
+        "segments": [{"length": s.length / MM, "od": s.od / MM, "id": s.id / MM} for s in holder.segments],
+    }
+
+
+def holder_from_dict(data: dict, source: str = "<library>") -> Holder:
+    """Inverse of :func:`holder_to_dict`; raises InputError naming ``source`` on bad data."""
+    r = _Reader(source)
+    if not isinstance(data, dict):
+        r.fail("holder", "must be a table")
+    return Holder(
+        name=r.text(data, "name", "holder"),
+        interface=r.text(data, "interface", "holder", "unknown"),
+        clamp_length=r.number(data, "clamp_length", "holder") * MM,
+        segments=r.segments(data, "holder"),
+        material=r.material(data, "holder", STEEL),
+    )
