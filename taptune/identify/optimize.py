@@ -1,0 +1,192 @@
+"""Optimisers on the unit cube [0, 1]^d: a real-coded genetic algorithm and a local polish.
+
+MODEL.md §8.5: tournament selection, simulated binary crossover (SBX), polynomial
+mutation, elitism, a seeded :class:`numpy.random.Generator`; then a bounded
+derivative-free polish (nlopt BOBYQA) from the GA's best. Every evaluated point is kept
+in an archive, because the near-optimal set is the uncertainty of the identification.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+
+class Cancelled(Exception):
+    """The caller asked the optimiser to stop (a progress callback returned False)."""
+
+
+@dataclass(frozen=True)
+class GAOptions:
+    """Settings of the genetic algorithm (MODEL.md §8.5 ranges)."""
+
+    population: int = 64
+    generations: int = 90
+    crossover_probability: float = 0.9
+    crossover_eta: float = 10.0  # SBX distribution index: larger = children nearer parents
+    mutation_eta: float = 20.0  # polynomial mutation distribution index
+    mutation_probability: float | None = None  # per gene; None = 1/d
+    tournament: int = 2
+    elite: int = 2
+    patience: int = 20  # stop after this many generations without improvement …
+    tolerance: float = 1e-4  # … by more than this (relative to the best value + 1e-3)
+
+
+@dataclass
+class Archive:
+    """Every point evaluated: unit-cube coordinates and objective values."""
+
+    u: list = field(default_factory=list)
+    f: list = field(default_factory=list)
+
+    def add(self, u: np.ndarray, f: np.ndarray) -> None:
+        self.u.append(np.atleast_2d(u).copy())
+        self.f.append(np.atleast_1d(f).copy())
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        if not self.u:
+            return np.empty((0, 0)), np.empty(0)
+        return np.vstack(self.u), np.concatenate(self.f)
+
+
+@dataclass(frozen=True)
+class OptimumResult:
+    """Best point of one optimisation run and what it cost."""
+
+    u: np.ndarray
+    value: float
+    evaluations: int
+    generations: int
+    archive_u: np.ndarray
+    archive_f: np.ndarray
+
+
+def latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
+    """n points in [0, 1]^d, one per stratum in every coordinate."""
+    u = (np.arange(n)[:, None] + rng.random((n, d))) / n
+    for j in range(d):
+        u[:, j] = u[rng.permutation(n), j]
+    return u
+
+
+def _sbx(a: np.ndarray, b: np.ndarray, eta: float, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated binary crossover of parent rows a, b (Deb & Agrawal 1995), vectorised."""
+    r = rng.random(a.shape)
+    beta = np.where(r <= 0.5, (2 * r) ** (1 / (eta + 1)), (1 / (2 * (1 - r))) ** (1 / (eta + 1)))
+    # Each gene crosses with probability 0.5, as in the standard operator.
+    beta = np.where(rng.random(a.shape) < 0.5, beta, 1.0)
+    c1 = 0.5 * ((1 + beta) * a + (1 - beta) * b)
+    c2 = 0.5 * ((1 - beta) * a + (1 + beta) * b)
+    return c1, c2
+
+
+def _polynomial_mutation(x: np.ndarray, eta: float, prob: float, rng) -> np.ndarray:
+    """Bounded polynomial mutation on [0, 1] (Deb & Goyal 1996), vectorised."""
+    mask = rng.random(x.shape) < prob
+    r = rng.random(x.shape)
+    d1, d2 = x, 1 - x
+    q = 1 / (eta + 1)
+    lo = (2 * r + (1 - 2 * r) * (1 - d1) ** (eta + 1)) ** q - 1
+    hi = 1 - (2 * (1 - r) + 2 * (r - 0.5) * (1 - d2) ** (eta + 1)) ** q
+    delta = np.where(r < 0.5, lo, hi)
+    return np.clip(np.where(mask, x + delta, x), 0.0, 1.0)
+
+
+def genetic_algorithm(
+    fun_batch: Callable[[np.ndarray], np.ndarray],
+    dim: int,
+    rng: np.random.Generator,
+    options: GAOptions = GAOptions(),
+    archive: Archive | None = None,
+    on_generation: Callable[[int, float], bool] | None = None,
+) -> OptimumResult:
+    """Minimise ``fun_batch`` (rows of unit-cube points → values) with a real-coded GA.
+
+    ``on_generation(generation, best_value)`` is called after every generation; returning
+    False raises :class:`Cancelled`.
+    """
+    archive = archive if archive is not None else Archive()
+    n = options.population + options.population % 2
+    prob_mut = options.mutation_probability or 1.0 / dim
+    pop = latin_hypercube(n, dim, rng)
+    fit = fun_batch(pop)
+    archive.add(pop, fit)
+    evaluations = n
+    best_hist = [float(fit.min())]
+    generation = 0
+    for generation in range(1, options.generations + 1):
+        # Tournament selection of n parents.
+        contenders = rng.integers(0, n, size=(n, options.tournament))
+        winners = contenders[np.arange(n), np.argmin(fit[contenders], axis=1)]
+        parents = pop[winners]
+        a, b = parents[0::2], parents[1::2]
+        c1, c2 = _sbx(a, b, options.crossover_eta, rng)
+        cross = rng.random(len(a))[:, None] < options.crossover_probability
+        children = np.vstack([np.where(cross, c1, a), np.where(cross, c2, b)])
+        children = _polynomial_mutation(np.clip(children, 0, 1), options.mutation_eta, prob_mut, rng)
+        child_fit = fun_batch(children)
+        archive.add(children, child_fit)
+        evaluations += len(children)
+        # Elitism: the best of the old population survive in place of the worst children.
+        elite = np.argsort(fit)[: options.elite]
+        worst = np.argsort(child_fit)[::-1][: options.elite]
+        children[worst], child_fit[worst] = pop[elite], fit[elite]
+        pop, fit = children, child_fit
+        best_hist.append(float(fit.min()))
+        if on_generation is not None and on_generation(generation, best_hist[-1]) is False:
+            raise Cancelled()
+        if generation > options.patience:
+            old = best_hist[-options.patience - 1]
+            if old - best_hist[-1] <= options.tolerance * (abs(best_hist[-1]) + 1e-3):
+                break
+    i = int(np.argmin(fit))
+    au, af = archive.arrays()
+    return OptimumResult(pop[i].copy(), float(fit[i]), evaluations, generation, au, af)
+
+
+def polish(
+    fun: Callable[[np.ndarray], float],
+    u0: np.ndarray,
+    max_evaluations: int = 400,
+    initial_step: float = 0.02,
+    archive: Archive | None = None,
+) -> tuple[np.ndarray, float, int]:
+    """Bounded local polish with nlopt's BOBYQA on the unit cube.
+
+    Returns the best point, its value and the evaluations used.
+    """
+    import nlopt
+
+    u0 = np.clip(np.asarray(u0, dtype=float), 0.0, 1.0)
+    dim = len(u0)
+    best = [u0.copy(), float(fun(u0))]
+    count = [1]
+    if archive is not None:
+        archive.add(u0, np.array([best[1]]))
+
+    def wrapped(u, grad):
+        value = float(fun(u))
+        count[0] += 1
+        if archive is not None:
+            archive.add(u, np.array([value]))
+        if value < best[1]:
+            best[0], best[1] = np.array(u, dtype=float), value
+        return value
+
+    opt = nlopt.opt(nlopt.LN_BOBYQA, dim)
+    opt.set_lower_bounds(np.zeros(dim))
+    opt.set_upper_bounds(np.ones(dim))
+    opt.set_min_objective(wrapped)
+    opt.set_maxeval(int(max_evaluations))
+    opt.set_xtol_abs(1e-7)
+    opt.set_ftol_rel(1e-10)
+    step = np.full(dim, initial_step)
+    # BOBYQA needs its initial trust region inside the box around u0.
+    opt.set_initial_step(step)
+    try:
+        opt.optimize(u0)
+    except (nlopt.RoundoffLimited, ValueError, RuntimeError):
+        pass  # keep the best point seen; BOBYQA may stop on round-off near the optimum
+    return best[0], best[1], count[0]

@@ -1,0 +1,79 @@
+"""The genetic algorithm and the BOBYQA polish find known optima, deterministically."""
+
+import numpy as np
+import pytest
+
+from taptune.identify.optimize import Archive, Cancelled, GAOptions, genetic_algorithm, latin_hypercube, polish
+
+OPTIMUM = np.array([0.13, 0.87, 0.42, 0.05, 0.61, 0.33, 0.77])
+
+
+def shifted_sphere(U):
+    """Convex bowl with its minimum 0 at OPTIMUM."""
+    return np.sum((np.atleast_2d(U) - OPTIMUM) ** 2, axis=1)
+
+
+def rastrigin(U):
+    """Multimodal: many local minima, the global one (0) at OPTIMUM."""
+    X = 4 * (np.atleast_2d(U) - OPTIMUM)
+    return np.sum(X**2 - np.cos(2 * np.pi * X) + 1, axis=1)
+
+
+def test_latin_hypercube_has_one_point_per_stratum():
+    u = latin_hypercube(10, 7, np.random.default_rng(1))
+    assert u.shape == (10, 7)
+    for j in range(7):
+        assert sorted(np.floor(u[:, j] * 10).astype(int)) == list(range(10))
+
+
+def test_ga_then_polish_finds_the_minimum_of_a_bowl():
+    rng = np.random.default_rng(0)
+    ga = genetic_algorithm(shifted_sphere, 7, rng, GAOptions(population=40, generations=60))
+    assert ga.value < 1e-2
+    u, value, n = polish(lambda x: float(shifted_sphere(x)[0]), ga.u, 400)
+    assert value < 1e-10
+    np.testing.assert_allclose(u, OPTIMUM, atol=1e-5)
+    assert n <= 401
+
+
+def test_ga_escapes_local_minima_of_rastrigin():
+    rng = np.random.default_rng(3)
+    ga = genetic_algorithm(rastrigin, 7, rng, GAOptions(population=80, generations=150, patience=40))
+    u, value, _ = polish(lambda x: float(rastrigin(x)[0]), ga.u, 400)
+    assert value < 1e-6, "the GA should land in the global basin"
+
+
+def test_same_seed_gives_identical_run_and_archive():
+    runs = []
+    for _ in range(2):
+        archive = Archive()
+        r = genetic_algorithm(rastrigin, 7, np.random.default_rng(42), GAOptions(generations=20), archive)
+        runs.append((r, archive.arrays()))
+    (a, (au, af)), (b, (bu, bf)) = runs
+    assert a.value == b.value and np.array_equal(a.u, b.u)
+    assert np.array_equal(au, bu) and np.array_equal(af, bf)
+    assert len(af) == a.evaluations
+
+
+def test_different_seeds_explore_differently():
+    a = genetic_algorithm(rastrigin, 7, np.random.default_rng(1), GAOptions(generations=5))
+    b = genetic_algorithm(rastrigin, 7, np.random.default_rng(2), GAOptions(generations=5))
+    assert not np.array_equal(a.archive_u, b.archive_u)
+
+
+def test_ga_stops_early_once_converged():
+    r = genetic_algorithm(shifted_sphere, 7, np.random.default_rng(0), GAOptions(generations=500, patience=10))
+    assert r.generations < 500
+
+
+def test_progress_callback_can_cancel():
+    with pytest.raises(Cancelled):
+        genetic_algorithm(shifted_sphere, 7, np.random.default_rng(0), on_generation=lambda g, best: g < 3)
+
+
+def test_polish_stays_inside_the_unit_cube():
+    # The minimum of this function lies outside the box: the polish must stop on the bound.
+    target = np.full(7, 1.3)
+    u, value, _ = polish(lambda x: float(np.sum((x - target) ** 2)), np.full(7, 0.5), 300)
+    assert np.all(u <= 1.0) and np.all(u >= 0.0)
+    np.testing.assert_allclose(u, 1.0, atol=1e-6)
