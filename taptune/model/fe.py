@@ -1,0 +1,261 @@
+"""The assembled free-free finite-element model (MODEL.md §4–§6).
+
+:func:`build_model` turns an assembly into an :class:`FEModel` holding the
+parameter-free affine pieces
+
+    K = K_tool + modulus_factor·K_holder + c_t (T0 + a T1) + c_r (R0 + a R1)
+    M = M_tool + density_factor·M_holder,      a = alpha / 100,
+
+so that any holder parameter set costs two sparse additions (:meth:`FEModel.matrices`).
+Global DOF order (MODEL.md §0.2): holder nodes in increasing z, then tool nodes, [w, θ]
+per node; the tool-tip w DOF is the second-to-last.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from taptune.io.assembly import Assembly
+from taptune.model.contact import contact_blocks
+from taptune.model.mesh import Mesh, build_mesh
+from taptune.model.options import ModelOptions
+from taptune.model.params import HolderParams
+
+
+def scatter(blocks, dofs, n_dofs) -> sp.csr_matrix:
+    """Sum element blocks into a global sparse matrix.
+
+    Parameters
+    ----------
+    blocks : ndarray, shape (n, k, k)
+        Element matrices (real or complex).
+    dofs : ndarray, shape (n, k), int
+        Global DOF of each block row/column.
+    n_dofs : int
+        Size of the global matrix.
+    """
+    rows = np.repeat(dofs[:, :, None], dofs.shape[1], axis=2)
+    cols = np.repeat(dofs[:, None, :], dofs.shape[1], axis=1)
+    m = sp.coo_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(n_dofs, n_dofs))
+    return m.tocsr()
+
+
+def element_dofs(n_elements: int, first_node: int) -> np.ndarray:
+    """DOFs [w1, θ1, w2, θ2] of a chain of elements whose first node is ``first_node``, (n, 4)."""
+    start = 2 * (first_node + np.arange(n_elements))
+    return start[:, None] + np.arange(4)[None, :]
+
+
+def rigid_body_vectors(z_nodes) -> tuple[np.ndarray, np.ndarray]:
+    """Rigid translation t (w = 1, θ = 0) and rotation r (w = z [m], θ = 1), shape (n_dofs,)."""
+    z = np.asarray(z_nodes, dtype=float)
+    t = np.zeros(2 * len(z))
+    r = np.zeros(2 * len(z))
+    t[0::2] = 1.0
+    r[0::2] = z
+    r[1::2] = 1.0
+    return t, r
+
+
+@dataclass(frozen=True)
+class FEModel:
+    """Parameter-free pieces of the free-free holder–tool model (SI, global DOF order).
+
+    Attributes
+    ----------
+    K_tool, K_holder : scipy.sparse.csr_matrix, complex, (n_dofs, n_dofs)
+        Body stiffness including the material loss factor (1 + i η_mat); K_holder at
+        nominal holder modulus.
+    M_tool, M_holder : scipy.sparse.csr_matrix, real
+        Body mass; M_holder at nominal holder density.
+    T0, T1, R0, R1 : scipy.sparse.csr_matrix, real
+        Contact layer per unit line stiffness (MODEL.md §5.3); T1, R1 carry ξ(z).
+    z_holder, z_tool : ndarray
+        Node positions of each body [m] (for the rigid-contact variant, the tool nodes
+        not tied to the holder).
+    n_elements : int
+        Beam elements of both bodies.
+    contact_nodes : ndarray, shape (n_c + 1, 2), int
+        Global node indices (holder, tool) of the coincident contact node pairs; for the
+        rigid-contact variant, (holder node, holder node) of the tied nodes.
+    options : ModelOptions
+        How the model was meshed.
+    rigid_contact : bool
+        True for the variant with tool and holder DOFs tied in the contact zone.
+    """
+
+    K_tool: sp.csr_matrix
+    K_holder: sp.csr_matrix
+    M_tool: sp.csr_matrix
+    M_holder: sp.csr_matrix
+    T0: sp.csr_matrix
+    T1: sp.csr_matrix
+    R0: sp.csr_matrix
+    R1: sp.csr_matrix
+    z_holder: np.ndarray
+    z_tool: np.ndarray
+    n_elements: int
+    contact_nodes: np.ndarray
+    options: ModelOptions = field(default_factory=ModelOptions)
+    rigid_contact: bool = False
+
+    @property
+    def z_nodes(self) -> np.ndarray:
+        """Node positions in global order (holder, then tool) [m]."""
+        return np.concatenate([self.z_holder, self.z_tool])
+
+    @property
+    def n_dofs(self) -> int:
+        return 2 * (len(self.z_holder) + len(self.z_tool))
+
+    @property
+    def tip_dof(self) -> int:
+        """Global index of the tool-tip translational DOF (second-to-last)."""
+        return self.n_dofs - 2
+
+    @property
+    def rigid_vectors(self) -> tuple[np.ndarray, np.ndarray]:
+        """(t, r): rigid translation and rotation, shape (n_dofs,) each (MODEL.md §6)."""
+        return rigid_body_vectors(self.z_nodes)
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.rigid_vectors[0]
+
+    @property
+    def r(self) -> np.ndarray:
+        return self.rigid_vectors[1]
+
+    def stiffness(self, params: HolderParams) -> sp.csr_matrix:
+        """Complex global stiffness K̃ for a parameter set, (n_dofs, n_dofs)."""
+        a = params.alpha / 100.0
+        return (
+            self.K_tool
+            + params.modulus_factor * self.K_holder
+            + params.c_t * (self.T0 + a * self.T1)
+            + params.c_r * (self.R0 + a * self.R1)
+        ).tocsr()
+
+    def mass(self, params: HolderParams) -> sp.csr_matrix:
+        """Real global mass M for a parameter set, (n_dofs, n_dofs)."""
+        return (self.M_tool + params.density_factor * self.M_holder).tocsr()
+
+    def matrices(self, params: HolderParams) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """(K̃, M) for a parameter set."""
+        return self.stiffness(params), self.mass(params)
+
+    def contact_stiffness(self, params: HolderParams) -> sp.csr_matrix:
+        """Complex contact-layer stiffness K̃_c alone (for strain-energy diagnostics)."""
+        a = params.alpha / 100.0
+        return (params.c_t * (self.T0 + a * self.T1) + params.c_r * (self.R0 + a * self.R1)).tocsr()
+
+
+def build_model(assembly: Assembly, options: ModelOptions = ModelOptions()) -> FEModel:
+    """Mesh an assembly and assemble the parameter-free model pieces (MODEL.md §2–§6).
+
+    Parameters
+    ----------
+    assembly : Assembly
+        Validated geometry in SI.
+    options : ModelOptions
+        Mesh and element variants.
+
+    Returns
+    -------
+    FEModel
+    """
+    return assemble(build_mesh(assembly, options), options)
+
+
+def assemble(mesh: Mesh, options: ModelOptions = ModelOptions()) -> FEModel:
+    """Global matrices of a meshed assembly (see :func:`build_model`)."""
+    h, t = mesh.holder, mesh.tool
+    n_h_nodes, n_t_nodes = len(h.z), len(t.z)
+    n = 2 * (n_h_nodes + n_t_nodes)
+    dofs_h = element_dofs(h.n_elements, 0)
+    dofs_t = element_dofs(t.n_elements, n_h_nodes)
+
+    def body(blocks, dofs):
+        return scatter(blocks, dofs, n)
+
+    he, te = mesh.contact_elements[:, 0], mesh.contact_elements[:, 1]
+    blocks = contact_blocks(h.z[he], h.length[he], h.phi()[he], t.phi()[te], mesh.z_zone)
+    dofs_c = np.concatenate([dofs_h[he], dofs_t[te]], axis=1)
+    contact_nodes = mesh.contact_nodes + np.array([0, n_h_nodes])
+    return FEModel(
+        K_tool=body(t.K(), dofs_t),
+        K_holder=body(h.K(), dofs_h),
+        M_tool=body(t.M(options.mass), dofs_t),
+        M_holder=body(h.M(options.mass), dofs_h),
+        T0=scatter(blocks.t0, dofs_c, n),
+        T1=scatter(blocks.t1, dofs_c, n),
+        R0=scatter(blocks.r0, dofs_c, n),
+        R1=scatter(blocks.r1, dofs_c, n),
+        z_holder=h.z,
+        z_tool=t.z,
+        n_elements=h.n_elements + t.n_elements,
+        contact_nodes=contact_nodes,
+        options=options,
+    )
+
+
+def tie_matrix(fe: FEModel) -> sp.csr_matrix:
+    """0/1 matrix P mapping the DOFs of the rigid-contact variant to those of ``fe``.
+
+    Every tool node in the contact zone is tied to its coincident holder node; the other
+    nodes keep their own DOFs, in the same order (holder, then the untied tool nodes).
+    Shape (fe.n_dofs, n_reduced).
+    """
+    n_nodes = len(fe.z_holder) + len(fe.z_tool)
+    tied_tool = set(int(j) for j in fe.contact_nodes[:, 1])
+    target = np.empty(n_nodes, dtype=int)
+    nxt = 0
+    for node in range(n_nodes):
+        if node not in tied_tool:
+            target[node] = nxt
+            nxt += 1
+    for hn, tn in fe.contact_nodes:
+        target[tn] = target[hn]
+    rows = np.arange(2 * n_nodes)
+    cols = (2 * target[:, None] + np.arange(2)[None, :]).ravel()
+    return sp.csr_matrix((np.ones(2 * n_nodes), (rows, cols)), shape=(2 * n_nodes, 2 * nxt))
+
+
+def rigid_contact_model(fe: FEModel) -> FEModel:
+    """The variant with tool and holder DOFs tied in the contact zone (MODEL.md §7.6, §13.4).
+
+    The contact matrices are zero in it (a tied layer is not strained); holder factors
+    still apply through :meth:`FEModel.matrices`, the contact parameters do nothing.
+    """
+    if fe.rigid_contact:
+        return fe
+    p = tie_matrix(fe)
+    pt = p.T.tocsr()
+
+    def reduce(m):
+        return (pt @ m @ p).tocsr()
+
+    n = p.shape[1]
+    zero = sp.csr_matrix((n, n))
+    tied = np.zeros(len(fe.z_tool), dtype=bool)
+    tied[fe.contact_nodes[:, 1] - len(fe.z_holder)] = True
+    holder_nodes = fe.contact_nodes[:, 0]
+    return FEModel(
+        K_tool=reduce(fe.K_tool),
+        K_holder=reduce(fe.K_holder),
+        M_tool=reduce(fe.M_tool),
+        M_holder=reduce(fe.M_holder),
+        T0=zero,
+        T1=zero,
+        R0=zero,
+        R1=zero,
+        z_holder=fe.z_holder,
+        z_tool=fe.z_tool[~tied],
+        n_elements=fe.n_elements,
+        contact_nodes=np.stack([holder_nodes, holder_nodes], axis=1),
+        options=fe.options,
+        rigid_contact=True,
+    )
