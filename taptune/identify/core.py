@@ -1,0 +1,411 @@
+"""Identify a holder from tap recordings, and predict it with other tools and stick-outs.
+
+The scikit-learn-like contract of taptune::
+
+    result = identify(analyses, assemblies, IdentifyOptions(seed=0))   # fit
+    predictions = predict(result.param_sets, assembly.with_stickout(0.0635))
+
+``identify`` runs several independent genetic-algorithm "islands" (seeded from one
+master seed, in parallel processes when allowed), polishes each best with BOBYQA, and
+keeps every candidate whose objective is close to the best: the parameters of this
+model are not all identifiable from three frequencies and one peak shape (MODEL.md §8.6),
+but the predictions are, and their spread over the near-optimal set is the honest
+uncertainty that ``predict`` reports.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+
+from taptune.errors import InputError
+from taptune.identify.objective import Objective, ObjectiveOptions, Target, make_target, model_shape
+from taptune.identify.optimize import Archive, Cancelled, GAOptions, genetic_algorithm, polish
+from taptune.model.params import NAMES, HolderParams, from_p, p_to_unit, to_p, unit_to_p
+
+ProgressCallback = Callable[[float, str], "bool | None"]
+
+
+@dataclass(frozen=True)
+class IdentifyOptions:
+    """How to identify. ``seed`` fixes the result; ``jobs`` only changes the speed."""
+
+    seed: int = 0
+    islands: int = 2  # independent GA runs, each polished; their union is the archive
+    jobs: int | None = None  # processes; None = min(islands, CPU count)
+    ga: GAOptions = GAOptions()
+    polish_evaluations: int = 400
+    objective: ObjectiveOptions = ObjectiveOptions()
+    model: object | None = None  # taptune.model.ModelOptions; None = defaults
+    # Near-optimal set: candidates with J <= J_min + near_abs + near_rel * J_min.
+    near_abs: float = 0.05
+    near_rel: float = 0.10
+    near_count: int = 12  # how many diverse members the set keeps (best included)
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Result of :func:`identify` (SI inside, library units for the parameters)."""
+
+    params: HolderParams
+    param_sets: tuple[HolderParams, ...]  # near-optimal set, best first
+    bending_measured_hz: tuple[tuple[float | None, ...], ...]  # per recording, modes 1–3
+    bending_model_hz: tuple[tuple[float, ...], ...]  # full model at the best params
+    damping_model: tuple[tuple[float, ...], ...]
+    objective: float
+    objective_terms: tuple[tuple[float, float], ...]  # (frequency, shape) per recording
+    evaluations: int
+    seconds: float
+    seed: int
+    warnings: tuple[str, ...]
+    window_hz: tuple[np.ndarray, ...] = field(repr=False, compare=False)
+    measured_shape: tuple[np.ndarray, ...] = field(repr=False, compare=False)
+    model_shape: tuple[np.ndarray, ...] = field(repr=False, compare=False)
+
+    @property
+    def param_spread(self) -> dict[str, float]:
+        """± half-range of each parameter over the near-optimal set."""
+        values = np.array([[getattr(p, n) for n in NAMES] for p in self.param_sets])
+        return {n: float((values[:, i].max() - values[:, i].min()) / 2) for i, n in enumerate(NAMES)}
+
+    def to_dict(self) -> dict:
+        """JSON-ready dictionary (CLI-CONTRACT.md keys for one recording; lists per recording for joint fits)."""
+        single = len(self.bending_measured_hz) == 1
+
+        def pick(x):
+            return list(x[0]) if single else [list(v) for v in x]
+
+        return {
+            "bending_measured_hz": pick(self.bending_measured_hz),
+            "bending_model_hz": pick([[round(f, 2) for f in v] for v in self.bending_model_hz]),
+            "damping_ratio_model": pick([[round(z, 6) for z in v] for v in self.damping_model]),
+            "params": self.params.to_dict(),
+            "params_spread": self.param_spread,
+            "near_optimal_sets": len(self.param_sets),
+            "objective": round(self.objective, 6),
+            "objective_terms": [{"frequency": round(f, 6), "shape": round(s, 6)} for f, s in self.objective_terms],
+            "evaluations": self.evaluations,
+            "seconds": round(self.seconds, 3),
+            "seed": self.seed,
+            "warnings": list(self.warnings),
+        }
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Predicted free-free bending modes of a holder with one tool at one stick-out."""
+
+    stickout_mm: float
+    bending_hz: tuple[float, ...]
+    bending_hz_spread: tuple[float, ...]
+    damping_ratio: tuple[float, ...]
+    damping_ratio_spread: tuple[float, ...]
+
+    def to_dict(self) -> dict:
+        return {
+            "stickout": round(self.stickout_mm, 4),
+            "bending_hz": [round(f, 2) for f in self.bending_hz],
+            "bending_hz_spread": [round(f, 2) for f in self.bending_hz_spread],
+            "damping_ratio": [round(z, 6) for z in self.damping_ratio],
+            "damping_ratio_spread": [round(z, 6) for z in self.damping_ratio_spread],
+        }
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _model_options(options: IdentifyOptions):
+    from taptune.model import ModelOptions
+
+    return options.model if options.model is not None else ModelOptions()
+
+
+def bending_peaks(analysis) -> dict[int, float]:
+    """Bending frequencies by mode number from a :class:`SpectrumAnalysis`."""
+    out: dict[int, float] = {}
+    for peak in analysis.peaks:
+        if peak.kind == "bending" and peak.mode is not None:
+            out[int(peak.mode)] = float(peak.hz)
+    return out
+
+
+def _select_diverse(u: np.ndarray, f: np.ndarray, count: int) -> np.ndarray:
+    """Indices of up to ``count`` mutually distant rows of u, starting with the best (farthest-point sampling)."""
+    order = np.argsort(f, kind="stable")
+    u = u[order]
+    chosen = [0]
+    dist = np.linalg.norm(u - u[0], axis=1)
+    while len(chosen) < min(count, len(u)):
+        i = int(np.argmax(dist))
+        if dist[i] < 1e-6:
+            break
+        chosen.append(i)
+        dist = np.minimum(dist, np.linalg.norm(u - u[i], axis=1))
+    return order[np.array(chosen)]
+
+
+# The objective and the progress counters an island sees. Set in the parent before the
+# worker processes fork, so the evaluators are built once and shared, never pickled.
+_STATE: dict = {}
+
+
+@dataclass(frozen=True)
+class _IslandResult:
+    u: np.ndarray
+    value: float
+    evaluations: int
+    archive_u: np.ndarray
+    archive_f: np.ndarray
+    cancelled: bool
+
+
+def _run_island(index: int) -> _IslandResult:
+    objective: Objective = _STATE["objective"]
+    options: IdentifyOptions = _STATE["options"]
+    counts, cancel = _STATE["counts"], _STATE["cancel"]
+    seed = np.random.SeedSequence(options.seed).spawn(options.islands)[index]
+    rng = np.random.default_rng(seed)
+    archive = Archive()
+    start = objective.evaluations
+
+    def fun_batch(U):
+        return objective.batch(unit_to_p(U))
+
+    def on_generation(generation, best):
+        counts[index] = generation
+        return not cancel.is_set()
+
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        try:
+            ga = genetic_algorithm(fun_batch, len(NAMES), rng, options.ga, archive, on_generation)
+        except Cancelled:
+            au, af = archive.arrays()
+            return _IslandResult(au[0], float(af[0]), objective.evaluations - start, au, af, True)
+        u, value, _ = polish(lambda x: objective(unit_to_p(x)), ga.u, options.polish_evaluations, archive=archive)
+    counts[index] = options.ga.generations
+    au, af = archive.arrays()
+    # Only the neighbourhood of the optimum matters for the near-optimal set; keep it small.
+    keep = af <= value + 10 * (options.near_abs + options.near_rel * abs(value)) + 1.0
+    return _IslandResult(u, value, objective.evaluations - start, au[keep], af[keep], False)
+
+
+def _run_islands(objective: Objective, options: IdentifyOptions, progress: ProgressCallback | None):
+    jobs = options.jobs or min(options.islands, os.cpu_count() or 1)
+    jobs = max(1, min(jobs, options.islands))
+    use_processes = jobs > 1 and "fork" in mp.get_all_start_methods()
+    ctx = mp.get_context("fork") if use_processes else None
+    counts = ctx.Array("i", options.islands, lock=False) if ctx else [0] * options.islands
+    cancel = ctx.Event() if ctx else _LocalFlag()
+    total = options.islands * options.ga.generations
+
+    def report() -> None:
+        if progress is not None and progress(min(0.95, sum(counts) / total), "fitting the model") is False:
+            cancel.set()
+
+    _STATE.update(objective=objective, options=options, counts=counts, cancel=cancel)
+    try:
+        if not use_processes:
+            results = []
+            for i in range(options.islands):
+                if progress is not None:
+                    _STATE["cancel"] = _ProgressFlag(report, cancel)
+                results.append(_run_island(i))
+                if cancel.is_set():
+                    break
+        else:
+            with ctx.Pool(jobs) as pool:
+                pending = pool.map_async(_run_island, range(options.islands))
+                while not pending.ready():
+                    pending.wait(0.1)
+                    report()
+                results = pending.get()
+    finally:
+        _STATE.clear()
+    if cancel.is_set() or any(r.cancelled for r in results):
+        raise Cancelled()
+    return results
+
+
+class _LocalFlag:
+    """A stand-in for multiprocessing.Event in the single-process path."""
+
+    def __init__(self):
+        self._set = False
+
+    def set(self):
+        self._set = True
+
+    def is_set(self):
+        return self._set
+
+
+class _ProgressFlag:
+    """Calls the progress report whenever the island asks whether it was cancelled."""
+
+    def __init__(self, report, flag):
+        self.report, self.flag = report, flag
+
+    def set(self):
+        self.flag.set()
+
+    def is_set(self):
+        self.report()
+        return self.flag.is_set()
+
+
+# ----------------------------------------------------------------------------- identify
+
+
+def identify(
+    analyses: Sequence,
+    assemblies: Sequence,
+    options: IdentifyOptions = IdentifyOptions(),
+    progress: ProgressCallback | None = None,
+    evaluator_factory: Callable | None = None,
+) -> Identification:
+    """Fit the seven holder parameters to one or several tap recordings of one holder.
+
+    Parameters
+    ----------
+    analyses : sequence of SpectrumAnalysis
+        One per recording (``taptune.signal.analyse_recording``), with labelled bending peaks.
+    assemblies : sequence of Assembly
+        The assembly of each recording (same holder, any tool and stick-out).
+    options : IdentifyOptions
+        Seed, optimiser budget, objective and model options.
+    progress : callable, optional
+        ``progress(fraction, message)``; returning False cancels (raises ``Cancelled``).
+    evaluator_factory : callable, optional
+        ``factory(assembly, model_options)`` returning an evaluator; default the fast
+        reduced model (:class:`taptune.model.reduced.FastEvaluator`).
+
+    Returns
+    -------
+    Identification
+    """
+    from taptune.model import build_model, solve_modes, tip_receptance
+
+    t0 = time.perf_counter()
+    if len(analyses) != len(assemblies) or not analyses:
+        raise InputError("identify: give one assembly per recording")
+    names = {a.holder.name for a in assemblies}
+    if len(names) > 1:
+        raise InputError(f"identify: a joint fit needs one holder, got {sorted(names)}")
+    model_options = _model_options(options)
+
+    def say(fraction, message):
+        if progress is not None and progress(fraction, message) is False:
+            raise Cancelled()
+
+    targets: list[Target] = []
+    warnings: list[str] = []
+    for analysis, asm in zip(analyses, assemblies):
+        label = getattr(analysis, "path", "") or asm.source
+        target = make_target(analysis.freq_hz, analysis.magnitude, bending_peaks(analysis), options.objective, label)
+        targets.append(target)
+        warnings.extend(target.warnings)
+
+    say(0.0, "building the model")
+    if evaluator_factory is None:
+        from taptune.model.reduced import FastEvaluator
+
+        evaluator_factory = FastEvaluator
+    evaluators = [evaluator_factory(asm, model_options) for asm in assemblies]
+    objective = Objective(targets, evaluators, options.objective)
+
+    say(0.05, "fitting the model")
+    results = _run_islands(objective, options, progress)
+    evaluations = sum(r.evaluations for r in results)
+    best = min(results, key=lambda r: r.value)
+
+    # Near-optimal set over the union of the islands' archives.
+    au = np.vstack([r.archive_u for r in results])
+    af = np.concatenate([r.archive_f for r in results])
+    j_min = float(min(af.min(), best.value))
+    near = af <= j_min + options.near_abs + options.near_rel * j_min
+    chosen = _select_diverse(au[near], af[near], options.near_count)
+    sets_u = au[near][chosen]
+    # The polished optimum heads the set even where the archive holds an equal value.
+    sets_u = np.vstack([best.u, sets_u[np.linalg.norm(sets_u - best.u, axis=1) > 1e-9]])[: options.near_count]
+    param_sets = tuple(from_p(unit_to_p(u)) for u in sets_u)
+    params = param_sets[0]
+
+    say(0.97, "checking on the full model")
+    measured, model_hz, model_zeta, window, meas_shape, mod_shape, terms = [], [], [], [], [], [], []
+    for target, asm in zip(targets, assemblies):
+        fe = build_model(asm, model_options)
+        modes = solve_modes(fe, params, n_modes=3)
+        h = tip_receptance(fe, params, target.window_hz)
+        fm = np.asarray(modes.frequency_hz[:3], dtype=float)
+        meas = {m: f for m, f in zip(target.modes, target.measured_hz)}
+        measured.append(tuple(float(meas[m]) if m in meas else None for m in (1, 2, 3)))
+        model_hz.append(tuple(float(f) for f in fm))
+        model_zeta.append(tuple(float(z) for z in modes.damping_ratio[:3]))
+        window.append(target.window_hz)
+        meas_shape.append(target.shape)
+        mod_shape.append(model_shape(target.window_hz, h, options.objective))
+        from taptune.identify.objective import objective_terms
+
+        terms.append(objective_terms(target, fm, h, options.objective))
+        misfit = np.abs(fm[np.asarray(target.modes) - 1] / target.measured_hz - 1)
+        if misfit.max() > 0.001:
+            warnings.append(
+                f"{target.label}: the fitted model misses a measured bending frequency by {100 * misfit.max():.2f} % "
+                "(check the peak labels and the assembly dimensions)"
+            )
+    at_bound = [n for n, u in zip(NAMES, p_to_unit(to_p(params))) if (u < 1e-3 or u > 1 - 1e-3) and n not in ("eta_tt", "eta_rr")]
+    if at_bound:
+        warnings.append(f"identified {', '.join(at_bound)} at the edge of the search space: the assembly description may be off")
+    say(1.0, "done")
+    return Identification(
+        params=params,
+        param_sets=param_sets,
+        bending_measured_hz=tuple(measured),
+        bending_model_hz=tuple(model_hz),
+        damping_model=tuple(model_zeta),
+        objective=float(sum(f + s for f, s in terms)),
+        objective_terms=tuple(terms),
+        evaluations=int(evaluations),
+        seconds=time.perf_counter() - t0,
+        seed=options.seed,
+        warnings=tuple(dict.fromkeys(warnings)),
+        window_hz=tuple(window),
+        measured_shape=tuple(meas_shape),
+        model_shape=tuple(mod_shape),
+    )
+
+
+# ----------------------------------------------------------------------------- predict
+
+
+def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3) -> Prediction:
+    """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
+
+    The first set is the best fit and gives the values; the spread is the largest
+    deviation of any other set from it (the half-width of the band that holds them all).
+    """
+    from taptune.model import ModelOptions, build_model, solve_modes
+
+    if not param_sets:
+        raise InputError("predict: the holder has no identified parameters")
+    fe = build_model(assembly, model_options or ModelOptions())
+    f, z = [], []
+    for params in param_sets:
+        modes = solve_modes(fe, params, n_modes=n_modes)
+        f.append(np.asarray(modes.frequency_hz[:n_modes], dtype=float))
+        z.append(np.asarray(modes.damping_ratio[:n_modes], dtype=float))
+    f, z = np.array(f), np.array(z)
+    return Prediction(
+        stickout_mm=assembly.stickout * 1e3,
+        bending_hz=tuple(map(float, f[0])),
+        bending_hz_spread=tuple(map(float, np.abs(f - f[0]).max(axis=0))),
+        damping_ratio=tuple(map(float, z[0])),
+        damping_ratio_spread=tuple(map(float, np.abs(z - z[0]).max(axis=0))),
+    )

@@ -1,0 +1,36 @@
+"""The steps every front end runs in the same order: recording → labelled spectrum → fit.
+
+The signal layer never imports the model, so the model's expectations (bending
+frequencies with nominal or library parameters, and the physical bounds of MODEL.md
+§7.6) are computed here and handed to ``analyse_recording`` as plain arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from taptune.model.params import NOMINAL, HolderParams
+
+
+def model_expectation(assembly, params: HolderParams | None = None, model_options=None):
+    """Expected bending frequencies [Hz] (3,) and their physical bounds [Hz] (3, 2)."""
+    from taptune.model import ModelOptions, analyse, bending_bounds
+
+    options = model_options or ModelOptions()
+    expected = np.asarray(analyse(assembly, params or NOMINAL, options).bending_hz[:3], dtype=float)
+    bounds = np.asarray(bending_bounds(assembly, options), dtype=float)
+    return expected, bounds
+
+
+def analyse_for_assembly(recording, assembly=None, params: HolderParams | None = None, model_options=None, **kwargs):
+    """Analyse a recording; with an assembly, the model guides the bending labels.
+
+    Extra keyword arguments go to :func:`taptune.signal.analysis.analyse_recording`.
+    """
+    from taptune.signal.analysis import analyse_recording
+
+    if assembly is None:
+        return analyse_recording(recording, **kwargs)
+    expected, bounds = model_expectation(assembly, params, model_options)
+    kwargs.setdefault("interface", assembly.holder.interface)
+    return analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, **kwargs)
