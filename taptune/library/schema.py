@@ -1,0 +1,649 @@
+"""The holder-library file format: entries, provenance records and their validation.
+
+A library file is one JSON document::
+
+    {"schema": "taptune-holder-library", "version": 1,
+     "holders": {NAME: ENTRY, ...}}
+
+with ``ENTRY`` as written by :meth:`HolderEntry.to_dict` (lengths in mm, moduli in GPa,
+holder parameters in library units, see :mod:`taptune.model.params`). Every read is
+validated here by hand-written checks on plain JSON data: nothing is ever executed,
+imported or unpickled, and every message names the file, the holder and the key.
+Unknown keys are rejected rather than ignored, so a typo or a foreign document cannot
+pass as a library; a newer format gets a new ``version``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field, replace
+from datetime import datetime, timezone
+from pathlib import Path
+
+from taptune.errors import InputError, LibraryError
+from taptune.io.assembly import (
+    CARBIDE,
+    GPA,
+    MM,
+    Assembly,
+    Holder,
+    Material,
+    Segment,
+    Tool,
+    holder_from_dict,
+    validate,
+)
+from taptune.model.params import NAMES, HolderParams
+
+SCHEMA = "taptune-holder-library"
+VERSION = 1
+
+# Units of the holder parameters in tables and CSV headers (ASCII so spreadsheets agree).
+PARAM_UNITS = {
+    "k_tt": "N/m/mm",
+    "k_rr": "N*m/rad/mm",
+    "eta_tt": "1/mm",
+    "eta_rr": "1/mm",
+    "alpha": "%",
+    "density_factor": "-",
+    "modulus_factor": "-",
+}
+
+_SHA256 = re.compile(r"^[0-9a-f]{64}$")
+_MAX_NAME = 200
+
+
+class LibraryFormatError(LibraryError, InputError):
+    """A library or import file that cannot be used: unreadable, not JSON, not this schema.
+
+    It is both a :class:`LibraryError` (what went wrong) and an :class:`InputError`
+    (whose fault: a file the user points at), so every command exits 2 on it.
+    """
+
+
+class UnknownHolderError(LibraryError, InputError):
+    """No holder of that name in the library; the message lists close matches."""
+
+    def __init__(self, message: str, name: str, close_matches: tuple[str, ...]):
+        super().__init__(message)
+        self.name = name
+        self.close_matches = close_matches
+
+
+# --------------------------------------------------------------------------- checks
+
+
+def _fail(src: str, key: str, problem: str):
+    raise LibraryFormatError(f"{src}: {key} {problem}")
+
+
+def _object(value, src: str, key: str, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
+    """``value`` as a JSON object with exactly the allowed keys (all ``required`` present)."""
+    if not isinstance(value, dict):
+        _fail(src, key, f"must be a JSON object, got {_kind(value)}")
+    unknown = [k for k in value if k not in required and k not in optional]
+    if unknown:
+        _fail(src, f"{key}.{unknown[0]}" if key else unknown[0], f"is not a known key (allowed: {', '.join(required + optional)})")
+    missing = [k for k in required if k not in value]
+    if missing:
+        _fail(src, f"{key}.{missing[0]}" if key else missing[0], "is missing")
+    return value
+
+
+def _number(value, src: str, key: str, lo: float | None = None, lo_open: bool = True) -> float:
+    """A finite JSON number, optionally above ``lo`` (strictly when ``lo_open``)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        _fail(src, key, f"must be a finite number, got {value!r}")
+    if lo is not None and (value <= lo if lo_open else value < lo):
+        _fail(src, key, f"must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
+    return float(value)
+
+
+def _integer(value, src: str, key: str, lo: int = 0) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < lo:
+        _fail(src, key, f"must be an integer >= {lo}, got {value!r}")
+    return value
+
+
+def _text(value, src: str, key: str, max_len: int = 1000) -> str:
+    if not isinstance(value, str) or not value.strip():
+        _fail(src, key, f"must be a non-empty string, got {value!r}")
+    if len(value) > max_len or any(ord(c) < 32 for c in value):
+        _fail(src, key, f"must be one line of at most {max_len} characters, got {value[:60]!r}")
+    return value
+
+
+def _numbers(value, src: str, key: str) -> tuple[float, ...]:
+    if not isinstance(value, list):
+        _fail(src, key, f"must be a list of numbers, got {_kind(value)}")
+    return tuple(_number(v, src, f"{key}[{i}]") for i, v in enumerate(value))
+
+
+def _plain(value, src: str, key: str, depth: int = 0):
+    """JSON scalars, lists and string-keyed objects only (what model options may hold)."""
+    if depth > 8:
+        _fail(src, key, "is nested too deeply")
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, (int, float)):
+        return _number(value, src, key) if isinstance(value, float) else value
+    if isinstance(value, list):
+        return [_plain(v, src, f"{key}[{i}]", depth + 1) for i, v in enumerate(value)]
+    if isinstance(value, dict):
+        return {k: _plain(v, src, f"{key}.{k}", depth + 1) for k, v in value.items()}
+    _fail(src, key, f"must be plain JSON data, got {_kind(value)}")
+
+
+def _kind(value) -> str:
+    names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean", type(None): "null"}
+    return names.get(type(value), f"a number ({value!r})" if isinstance(value, (int, float)) else type(value).__name__)
+
+
+def _material(value, src: str, key: str) -> dict:
+    m = _object(value, src, key, ("density", "youngs_modulus", "poisson", "loss_factor"))
+    out = {
+        "density": _number(m["density"], src, f"{key}.density", 0.0),
+        "youngs_modulus": _number(m["youngs_modulus"], src, f"{key}.youngs_modulus", 0.0),
+        "poisson": _number(m["poisson"], src, f"{key}.poisson", -1.0),
+        "loss_factor": _number(m["loss_factor"], src, f"{key}.loss_factor", 0.0, lo_open=False),
+    }
+    if out["poisson"] >= 0.5:
+        _fail(src, f"{key}.poisson", f"must be < 0.5, got {out['poisson']!r}")
+    if out["loss_factor"] >= 1:
+        _fail(src, f"{key}.loss_factor", f"must be < 1, got {out['loss_factor']!r}")
+    return out
+
+
+def _segments(value, src: str, key: str) -> list[dict]:
+    if not isinstance(value, list) or not value:
+        _fail(src, key, "must be a non-empty list of {length, od, id} objects")
+    out = []
+    for i, s in enumerate(value, 1):
+        k = f"{key}[{i}]"
+        s = _object(s, src, k, ("length", "od", "id"))
+        seg = {
+            "length": _number(s["length"], src, f"{k}.length", 0.0),
+            "od": _number(s["od"], src, f"{k}.od", 0.0),
+            "id": _number(s["id"], src, f"{k}.id", 0.0, lo_open=False),
+        }
+        if seg["id"] >= seg["od"]:
+            _fail(src, f"{k}.id", f"must be smaller than od ({seg['od']:g} mm), got {seg['id']:g}")
+        out.append(seg)
+    return out
+
+
+def check_holder_dict(value, src: str, key: str = "holder") -> dict:
+    """Validate holder geometry as written by :func:`taptune.io.assembly.holder_to_dict` (mm, GPa)."""
+    h = _object(value, src, key, ("name", "interface", "clamp_length", "material", "segments"))
+    out = {
+        "name": _text(h["name"], src, f"{key}.name", _MAX_NAME),
+        "interface": _text(h["interface"], src, f"{key}.interface", _MAX_NAME),
+        "clamp_length": _number(h["clamp_length"], src, f"{key}.clamp_length", 0.0),
+        "material": _material(h["material"], src, f"{key}.material"),
+        "segments": _segments(h["segments"], src, f"{key}.segments"),
+    }
+    length = sum(s["length"] for s in out["segments"])
+    if out["clamp_length"] > length * (1 + 1e-9):
+        _fail(src, f"{key}.clamp_length", f"({out['clamp_length']:g} mm) exceeds the holder length ({length:g} mm)")
+    return out
+
+
+_TOOL_OPTIONAL = ("shank_diameter", "flute_length", "flute_diameter", "flute_ratio")
+
+
+def check_tool_dict(value, src: str, key: str = "tool") -> dict:
+    """Validate tool geometry as written by :func:`tool_to_dict` (mm, GPa)."""
+    t = _object(value, src, key, ("name", "total_length", "material", "segments"), _TOOL_OPTIONAL)
+    out = {
+        "name": _text(t["name"], src, f"{key}.name", _MAX_NAME),
+        "total_length": _number(t["total_length"], src, f"{key}.total_length", 0.0),
+        "material": _material(t["material"], src, f"{key}.material"),
+        "segments": _segments(t["segments"], src, f"{key}.segments"),
+    }
+    for k in _TOOL_OPTIONAL:
+        if k in t and t[k] is not None:
+            out[k] = _number(t[k], src, f"{key}.{k}", 0.0)
+    length = sum(s["length"] for s in out["segments"])
+    if abs(length - out["total_length"]) > 0.01:
+        _fail(src, f"{key}.total_length", f"is {out['total_length']:g} mm but the segments add up to {length:g} mm")
+    return out
+
+
+def check_params(value, src: str, key: str) -> HolderParams:
+    """Validate the seven holder parameters (exactly the keys of :data:`NAMES`)."""
+    _object(value, src, key, NAMES)
+    try:
+        return HolderParams.from_dict(value, f"{src}: {key}")
+    except InputError as err:
+        raise LibraryFormatError(str(err)) from None
+
+
+def check_date(value, src: str, key: str) -> str:
+    """An ISO-8601 date-time in UTC (``Z`` or ``+00:00``)."""
+    text = _text(value, src, key, 64)
+    try:
+        when = datetime.fromisoformat(text)
+    except ValueError:
+        _fail(src, key, f"must be an ISO-8601 date and time in UTC, got {text!r}")
+    if when.tzinfo is None or when.utcoffset().total_seconds() != 0:
+        _fail(src, key, f"must be in UTC (end with Z or +00:00), got {text!r}")
+    return text
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+def tool_to_dict(tool: Tool) -> dict:
+    """Tool geometry as plain JSON-able data (mm, GPa); kept with each identification."""
+    m = tool.material
+    out = {
+        "name": tool.name,
+        "total_length": tool.total_length / MM,
+        "material": {
+            "density": m.density,
+            "youngs_modulus": m.youngs_modulus / GPA,
+            "poisson": m.poisson,
+            "loss_factor": m.loss_factor,
+        },
+        "segments": [{"length": s.length / MM, "od": s.od / MM, "id": s.id / MM} for s in tool.segments],
+    }
+    for k in ("shank_diameter", "flute_length", "flute_diameter"):
+        if getattr(tool, k) is not None:
+            out[k] = getattr(tool, k) / MM
+    if tool.flute_ratio is not None:
+        out["flute_ratio"] = tool.flute_ratio
+    return out
+
+
+def tool_from_dict(data: dict, source: str = "<library>") -> Tool:
+    """Inverse of :func:`tool_to_dict` (SI inside); raises LibraryFormatError naming ``source``."""
+    t = check_tool_dict(data, source)
+    m = t["material"]
+
+    def mm(key):
+        return t[key] * MM if key in t else None
+
+    return Tool(
+        name=t["name"],
+        total_length=t["total_length"] * MM,
+        segments=tuple(Segment(s["length"] * MM, s["od"] * MM, s["id"] * MM) for s in t["segments"]),
+        material=Material(m["density"], m["youngs_modulus"] * GPA, m["poisson"], m["loss_factor"]),
+        shank_diameter=mm("shank_diameter"),
+        flute_length=mm("flute_length"),
+        flute_diameter=mm("flute_diameter"),
+        flute_ratio=t.get("flute_ratio"),
+    )
+
+
+# --------------------------------------------------------------------------- records
+
+
+def utc_now() -> str:
+    """The current time as ISO-8601 UTC to the second, e.g. ``2026-11-22T12:38:49Z``."""
+    return datetime.now(timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+
+
+def sha256_file(path: str | Path) -> str:
+    """Hex SHA-256 of a file's bytes (identifies a recording whatever its name)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True)
+class ProvenanceRecord:
+    """One identification that produced (or refined) a library entry.
+
+    Parameters
+    ----------
+    recording : str
+        File name of the recording (no folder).
+    sha256 : str
+        Hex SHA-256 of the recording's bytes.
+    tool : dict
+        Tool geometry (:func:`tool_to_dict`, mm), enough to rebuild the assembly.
+    stickout_mm : float
+        Stick-out of the tool during the recording [mm].
+    date : str
+        When the identification ran, ISO-8601 UTC.
+    objective : float
+        Final objective value J (MODEL.md §8.4).
+    seed : int or None
+        Optimiser seed (None if the run was not seeded).
+    evaluations : int
+        Model evaluations the optimiser used.
+    bending_measured_hz, bending_model_hz : tuple of float
+        Measured and fitted bending frequencies f1… [Hz].
+    taptune_version : str
+        Version of taptune that ran the identification.
+    """
+
+    recording: str
+    sha256: str
+    tool: dict
+    stickout_mm: float
+    date: str
+    objective: float
+    seed: int | None
+    evaluations: int
+    bending_measured_hz: tuple[float, ...]
+    bending_model_hz: tuple[float, ...]
+    taptune_version: str
+
+    def __post_init__(self):
+        # Lists from callers become tuples so records compare and hash like values.
+        object.__setattr__(self, "bending_measured_hz", tuple(float(f) for f in self.bending_measured_hz))
+        object.__setattr__(self, "bending_model_hz", tuple(float(f) for f in self.bending_model_hz))
+
+    @property
+    def tool_name(self) -> str:
+        """Name of the tool used in this identification."""
+        return self.tool["name"]
+
+    @classmethod
+    def from_recording(
+        cls,
+        path: str | Path,
+        tool: Tool,
+        stickout_mm: float,
+        objective: float,
+        seed: int | None,
+        evaluations: int,
+        bending_measured_hz,
+        bending_model_hz,
+        date: str | None = None,
+    ) -> "ProvenanceRecord":
+        """A record for the recording at ``path`` (name and SHA-256 taken from the file)."""
+        from taptune import __version__
+
+        return cls(
+            recording=Path(path).name,
+            sha256=sha256_file(path),
+            tool=tool_to_dict(tool),
+            stickout_mm=float(stickout_mm),
+            date=date or utc_now(),
+            objective=float(objective),
+            seed=None if seed is None else int(seed),
+            evaluations=int(evaluations),
+            bending_measured_hz=tuple(bending_measured_hz),
+            bending_model_hz=tuple(bending_model_hz),
+            taptune_version=__version__,
+        )
+
+    def to_dict(self) -> dict:
+        return {
+            "recording": self.recording,
+            "sha256": self.sha256,
+            "tool": self.tool,
+            "stickout_mm": self.stickout_mm,
+            "date": self.date,
+            "objective": self.objective,
+            "seed": self.seed,
+            "evaluations": self.evaluations,
+            "bending_measured_hz": list(self.bending_measured_hz),
+            "bending_model_hz": list(self.bending_model_hz),
+            "taptune_version": self.taptune_version,
+        }
+
+    @classmethod
+    def from_dict(cls, data, source: str = "<library>", key: str = "identification") -> "ProvenanceRecord":
+        """Validated record from JSON data; errors name ``source`` and ``key``."""
+        d = _object(data, source, key, tuple(f for f in cls.__dataclass_fields__))
+        sha = d["sha256"]
+        if not isinstance(sha, str) or not _SHA256.match(sha):
+            _fail(source, f"{key}.sha256", f"must be 64 lower-case hex digits, got {sha!r}")
+        seed = d["seed"]
+        return cls(
+            recording=_text(d["recording"], source, f"{key}.recording"),
+            sha256=sha,
+            tool=check_tool_dict(d["tool"], source, f"{key}.tool"),
+            stickout_mm=_number(d["stickout_mm"], source, f"{key}.stickout_mm", 0.0),
+            date=check_date(d["date"], source, f"{key}.date"),
+            objective=_number(d["objective"], source, f"{key}.objective", 0.0, lo_open=False),
+            seed=None if seed is None else _integer(seed, source, f"{key}.seed"),
+            evaluations=_integer(d["evaluations"], source, f"{key}.evaluations"),
+            bending_measured_hz=_numbers(d["bending_measured_hz"], source, f"{key}.bending_measured_hz"),
+            bending_model_hz=_numbers(d["bending_model_hz"], source, f"{key}.bending_model_hz"),
+            taptune_version=_text(d["taptune_version"], source, f"{key}.taptune_version", 64),
+        )
+
+
+# --------------------------------------------------------------------------- entries
+
+
+@dataclass(frozen=True)
+class HolderEntry:
+    """A holder in the library: geometry, identified parameters, uncertainty set, history.
+
+    Parameters
+    ----------
+    name : str
+        Library key (the assembly file's holder name).
+    holder : dict
+        Holder geometry (:func:`taptune.io.assembly.holder_to_dict`, mm, GPa).
+    interface : str
+        Spindle interface, e.g. ``"HSK-A63"`` (equal to ``holder["interface"]``).
+    params : HolderParams
+        The best parameters.
+    param_sets : tuple of HolderParams
+        Near-optimal parameter sets (MODEL.md §8.6); their spread is the uncertainty.
+    model_options : dict
+        The model options the parameters were identified with (MODEL.md §5.3).
+    identifications : tuple of ProvenanceRecord
+        Every identification of this holder, oldest first.
+    """
+
+    name: str
+    holder: dict
+    interface: str
+    params: HolderParams
+    param_sets: tuple[HolderParams, ...] = ()
+    model_options: dict = field(default_factory=dict)
+    identifications: tuple[ProvenanceRecord, ...] = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "param_sets", tuple(self.param_sets))
+        object.__setattr__(self, "identifications", tuple(self.identifications))
+
+    @classmethod
+    def create(
+        cls,
+        holder: Holder,
+        params: HolderParams,
+        param_sets=(),
+        model_options: dict | None = None,
+        identifications=(),
+        name: str | None = None,
+    ) -> "HolderEntry":
+        """An entry for an io ``Holder`` (named after it unless ``name`` is given)."""
+        from taptune.io.assembly import holder_to_dict
+
+        return cls(
+            name=name or holder.name,
+            holder=holder_to_dict(holder),
+            interface=holder.interface,
+            params=params,
+            param_sets=tuple(param_sets),
+            model_options=dict(model_options or {}),
+            identifications=tuple(identifications),
+        )
+
+    def to_dict(self) -> dict:
+        return {
+            "name": self.name,
+            "interface": self.interface,
+            "holder": self.holder,
+            "params": self.params.to_dict(),
+            "param_sets": [p.to_dict() for p in self.param_sets],
+            "model_options": self.model_options,
+            "identifications": [r.to_dict() for r in self.identifications],
+        }
+
+    @classmethod
+    def from_dict(cls, data, source: str = "<library>") -> "HolderEntry":
+        """Validated entry from JSON data; errors name ``source`` (file and holder) and the key."""
+        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__))
+        holder = check_holder_dict(d["holder"], source)
+        interface = _text(d["interface"], source, "interface", _MAX_NAME)
+        if interface != holder["interface"]:
+            _fail(source, "interface", f"{interface!r} differs from holder.interface {holder['interface']!r}")
+        sets = d["param_sets"]
+        if not isinstance(sets, list):
+            _fail(source, "param_sets", f"must be a list of parameter objects, got {_kind(sets)}")
+        options = d["model_options"]
+        if not isinstance(options, dict):
+            _fail(source, "model_options", f"must be a JSON object, got {_kind(options)}")
+        records = d["identifications"]
+        if not isinstance(records, list):
+            _fail(source, "identifications", f"must be a list, got {_kind(records)}")
+        return cls(
+            name=_text(d["name"], source, "name", _MAX_NAME),
+            holder=holder,
+            interface=interface,
+            params=check_params(d["params"], source, "params"),
+            param_sets=tuple(check_params(p, source, f"param_sets[{i}]") for i, p in enumerate(sets)),
+            model_options=_plain(options, source, "model_options"),
+            identifications=tuple(
+                ProvenanceRecord.from_dict(r, source, f"identifications[{i}]") for i, r in enumerate(records)
+            ),
+        )
+
+    def holder_geometry(self) -> Holder:
+        """The holder as an io :class:`~taptune.io.assembly.Holder` (SI)."""
+        return holder_from_dict(self.holder, f"holder {self.name!r}")
+
+    def assembly(self, tool: dict | Tool, stickout_mm: float) -> Assembly:
+        """This holder with ``tool`` (a :func:`tool_to_dict` dict or a Tool) at ``stickout_mm``, validated."""
+        if isinstance(tool, dict):
+            tool = tool_from_dict(tool, f"holder {self.name!r}: tool")
+        source = f"holder {self.name!r} with tool {tool.name!r} at {stickout_mm:g} mm"
+        return validate(Assembly(self.holder_geometry(), tool, stickout_mm * MM, source=source))
+
+    def spread(self) -> dict[str, float]:
+        """± half-width of each parameter over the best and the near-optimal sets (library units)."""
+        sets = (self.params,) + self.param_sets
+        out = {}
+        for k in NAMES:
+            values = [getattr(p, k) for p in sets]
+            out[k] = (max(values) - min(values)) / 2
+        return out
+
+    @property
+    def last_identified(self) -> str | None:
+        """Date of the latest identification (ISO-8601 UTC), None if there is none."""
+        dates = [r.date for r in self.identifications]
+        return max(dates, key=lambda d: datetime.fromisoformat(d)) if dates else None
+
+    def differences(self, other: "HolderEntry") -> list[str]:
+        """What differs between two entries apart from their identification history."""
+        out = []
+        for k in NAMES:
+            a, b = getattr(self.params, k), getattr(other.params, k)
+            if a != b:
+                out.append(f"{k} {a:.6g} vs {b:.6g}")
+        if self.param_sets != other.param_sets:
+            out.append(f"param_sets ({len(self.param_sets)} vs {len(other.param_sets)} sets)")
+        if self.holder != other.holder or self.interface != other.interface:
+            out.append("holder geometry")
+        if self.model_options != other.model_options:
+            out.append("model_options")
+        return out
+
+    def superseding(self, older: "HolderEntry") -> "HolderEntry":
+        """This entry's parameters and geometry with ``older``'s history kept in front.
+
+        Records already in ``older`` are not repeated, so putting back an entry that was
+        read, extended and written is the same as appending its new records.
+        """
+        history = list(older.identifications)
+        history += [r for r in self.identifications if r not in older.identifications]
+        return replace(self, identifications=tuple(history))
+
+
+# --------------------------------------------------------------------------- documents
+
+
+def _reject_constant(name: str):
+    # JSON has no NaN or Infinity; Python's json would otherwise accept them.
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _unique_keys(pairs):
+    keys = [k for k, _ in pairs]
+    if len(set(keys)) != len(keys):
+        dup = next(k for k in keys if keys.count(k) > 1)
+        raise ValueError(f"duplicate key {dup!r}")
+    return dict(pairs)
+
+
+def decode(raw: bytes, source: str) -> object:
+    """Parse JSON bytes strictly (UTF-8, no NaN, no duplicate keys); plain data only."""
+    if not raw.strip():
+        raise LibraryFormatError(f"{source}: is empty (truncated?), not a holder library")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise LibraryFormatError(f"{source}: is not UTF-8 text, so not a holder library (JSON)") from None
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys, parse_constant=_reject_constant)
+    except json.JSONDecodeError as err:
+        raise LibraryFormatError(
+            f"{source}: is not valid JSON (line {err.lineno} column {err.colno}: {err.msg}); truncated or not a holder library"
+        ) from None
+    except ValueError as err:
+        raise LibraryFormatError(f"{source}: is not valid JSON ({err})") from None
+    except RecursionError:
+        raise LibraryFormatError(f"{source}: JSON is nested too deeply to be a holder library") from None
+
+
+def parse_library(data, source: str) -> dict[str, HolderEntry]:
+    """Validate a decoded library document; return its entries by name."""
+    if not isinstance(data, dict) or data.get("schema") != SCHEMA:
+        found = data.get("schema") if isinstance(data, dict) else None
+        what = f"schema {found!r}" if found is not None else "no \"schema\": \"taptune-holder-library\" key"
+        raise LibraryFormatError(f"{source}: is not a taptune holder library ({what})")
+    _object(data, source, "", ("schema", "version", "holders"))
+    version = data["version"]
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        _fail(source, "version", f"must be a positive integer, got {version!r}")
+    if version > VERSION:
+        _fail(source, "version", f"is {version}: written by a newer taptune (this one reads version {VERSION})")
+    holders = data["holders"]
+    if not isinstance(holders, dict):
+        _fail(source, "holders", f"must be a JSON object of holders by name, got {_kind(holders)}")
+    out = {}
+    for name, value in holders.items():
+        where = f"{source}: holder {name!r}"
+        entry = HolderEntry.from_dict(value, where)
+        if entry.name != name:
+            _fail(where, "name", f"{entry.name!r} differs from its key in \"holders\"")
+        out[name] = entry
+    return out
+
+
+def library_document(entries: dict[str, HolderEntry]) -> dict:
+    """The JSON document of a library (holders sorted by name, for stable diffs)."""
+    return {
+        "schema": SCHEMA,
+        "version": VERSION,
+        "holders": {name: entries[name].to_dict() for name in sorted(entries)},
+    }
+
+
+def encode(entries: dict[str, HolderEntry], source: str) -> bytes:
+    """Library bytes, checked by reading them back: nothing is written that cannot be read."""
+    for name, entry in entries.items():
+        if not isinstance(entry, HolderEntry) or entry.name != name:
+            raise LibraryError(f"{source}: holder {name!r} must be a HolderEntry named {name!r}")
+    try:
+        text = json.dumps(library_document(entries), indent=2, ensure_ascii=False, allow_nan=False)
+    except (TypeError, ValueError) as err:
+        raise LibraryFormatError(f"{source}: cannot be written as JSON ({err})") from None
+    raw = (text + "\n").encode("utf-8")
+    parse_library(decode(raw, source), source)
+    return raw

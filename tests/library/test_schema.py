@@ -1,0 +1,181 @@
+"""The library file format: exact round trips, validation messages, nothing ever executed."""
+
+from __future__ import annotations
+
+import copy
+import json
+import pickle
+
+import pytest
+
+from taptune.io.assembly import parse_assembly
+from taptune.library import HolderEntry, HolderLibrary, LibraryFormatError, ProvenanceRecord, tool_from_dict, tool_to_dict
+from taptune.library.schema import decode, encode, parse_library
+from tests.library.entries import REFERENCE, make_entry, make_record
+
+
+def document(*entries: HolderEntry) -> dict:
+    return json.loads(encode({e.name: e for e in entries}, "<test>"))
+
+
+def test_entry_round_trips_through_json_exactly():
+    entry = make_entry(records=3)
+    again = HolderEntry.from_dict(json.loads(json.dumps(entry.to_dict())), "<test>")
+    assert again == entry
+    assert parse_library(document(entry), "<test>") == {entry.name: entry}
+
+
+def test_tool_geometry_round_trips_for_both_tool_descriptions():
+    stepped = parse_assembly(
+        {
+            "holder": {"name": "H", "clamp_length": 40, "segments": [{"length": 100, "od": 50, "id": 16}]},
+            "tool": {"name": "stepped", "total_length": 90, "segments": [{"length": 50, "od": 16}, {"length": 40, "od": 12}]},
+            "setup": {"stickout": 50},
+        }
+    ).tool
+    for tool in (REFERENCE.tool, stepped):
+        assert tool_from_dict(json.loads(json.dumps(tool_to_dict(tool)))) == tool
+
+
+def test_entry_rebuilds_the_identified_assembly():
+    entry = make_entry()
+    record = entry.identifications[0]
+    asm = entry.assembly(record.tool, record.stickout_mm)
+    assert asm.holder == REFERENCE.holder and asm.tool == REFERENCE.tool
+    assert asm.stickout == pytest.approx(REFERENCE.stickout, abs=1e-12)
+    assert entry.holder_geometry() == REFERENCE.holder
+
+
+def test_spread_is_the_half_width_over_best_and_near_optimal_sets():
+    entry = make_entry()
+    spread = entry.spread()
+    # k_tt: best 2.81e9, sets 1.1x and 0.95x -> half-width (1.1 - 0.95) / 2 x 2.81e9
+    assert spread["k_tt"] == pytest.approx(0.075 * 2.81e9)
+    assert spread["eta_tt"] == pytest.approx((9e-3 - 2e-3) / 2)
+    assert spread["alpha"] == pytest.approx((-6.5 - -12.0) / 2)
+    assert spread["k_rr"] == 0.0
+
+
+def test_last_identified_is_the_latest_date():
+    entry = make_entry(records=3, first=4)
+    assert entry.last_identified == "2026-11-22T12:00:06Z"
+    assert make_entry(records=0).last_identified is None
+
+
+# --------------------------------------------------------------------------- validation
+
+NAME = "ER32 collet chuck HSK-A63 x 100"
+
+
+def mutate(path: tuple, value):
+    def apply(doc):
+        node = doc["holders"][NAME]
+        for key in path[:-1]:
+            node = node[key]
+        if value is KeyError:
+            del node[path[-1]]
+        else:
+            node[path[-1]] = value
+        return doc
+
+    return apply
+
+
+@pytest.mark.parametrize(
+    "change, key, problem",
+    [
+        (mutate(("params", "k_tt"), "stiff"), "k_tt", "finite number"),
+        (mutate(("params", "k_rr"), -1.0), "k_rr", "> 0"),
+        (mutate(("params", "eta_rr"), KeyError), "params.eta_rr", "is missing"),
+        (mutate(("params", "extra"), 1.0), "params.extra", "not a known key"),
+        (mutate(("param_sets", 1, "alpha"), 150.0), "alpha", "(-100, 100)"),
+        (mutate(("holder", "segments", 1, "od"), -48.0), "holder.segments[2].od", "> 0"),
+        (mutate(("holder", "clamp_length"), 500.0), "holder.clamp_length", "exceeds the holder length"),
+        (mutate(("interface",), "SK40"), "interface", "differs from holder.interface"),
+        (mutate(("identifications", 0, "sha256"), "abc"), "identifications[0].sha256", "64 lower-case hex"),
+        (mutate(("identifications", 0, "date"), "yesterday"), "identifications[0].date", "ISO-8601"),
+        (mutate(("identifications", 0, "date"), "2026-11-22T12:00:00+01:00"), "identifications[0].date", "UTC"),
+        (mutate(("identifications", 0, "seed"), 1.5), "identifications[0].seed", "integer"),
+        (mutate(("identifications", 0, "tool", "segments"), []), "identifications[0].tool.segments", "non-empty"),
+        (mutate(("identifications", 0, "bending_measured_hz"), "3 kHz"), "bending_measured_hz", "list of numbers"),
+        (mutate(("model_options",), [1, 2]), "model_options", "JSON object"),
+        (mutate(("__class__",), "os.system"), "__class__", "not a known key"),
+        (mutate(("name",), "other"), "name", "differs from its key"),
+    ],
+)
+def test_validation_names_file_holder_and_key(tmp_path, change, key, problem):
+    path = tmp_path / "holders.json"
+    path.write_text(json.dumps(change(document(make_entry(NAME)))))
+    with pytest.raises(LibraryFormatError) as info:
+        HolderLibrary(path).entries()
+    message = str(info.value)
+    assert message.startswith(f"{path}: holder {NAME!r}: "), message
+    assert key in message and problem in message, message
+
+
+@pytest.mark.parametrize(
+    "text, problem",
+    [
+        ('{"schema": "taptune-holder-library", "version": 2, "holders": {}}', "newer taptune"),
+        ('{"schema": "taptune-holder-library", "version": "1", "holders": {}}', "version must be a positive integer"),
+        ('{"schema": "taptune-holder-library", "version": 1, "holders": []}', "holders must be a JSON object"),
+        ('{"schema": "taptune-holder-library", "version": 1, "holders": {}, "x": 1}', "x is not a known key"),
+        ('{"schema": "taptune-holder-library", "version": 1, "holders": {"a": NaN}}', "NaN is not a JSON number"),
+        ('{"schema": "taptune-holder-library", "version": 1, "holders": {}, "holders": {}}', "duplicate key 'holders'"),
+        ('{"version": 1, "holders": {}}', "not a taptune holder library"),
+        ("[" * 100000, "nested too deeply"),
+    ],
+)
+def test_document_level_problems_name_the_file(text, problem):
+    with pytest.raises(LibraryFormatError, match=problem) as info:
+        parse_library(decode(text.encode(), "lib.json"), "lib.json")
+    assert str(info.value).startswith("lib.json: ")
+
+
+def test_nothing_invalid_is_ever_written(lib):
+    bad = make_entry("A")
+    bad = HolderEntry(**{**bad.__dict__, "identifications": (ProvenanceRecord(**{**make_record().__dict__, "sha256": "xyz"}),)})
+    with pytest.raises(LibraryFormatError, match="sha256"):
+        lib.put(bad)
+    assert not lib.path.exists()
+
+
+# --------------------------------------------------------------------------- never executed
+
+
+class Exploit:
+    """Unpickling this would create a marker file: proof that pickle ran code."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+def test_a_pickle_is_rejected_without_being_unpickled(tmp_path):
+    marker = tmp_path / "pwned"
+    path = tmp_path / "holders.json"
+    path.write_bytes(pickle.dumps(Exploit(str(marker))))
+    with pytest.raises(LibraryFormatError, match="not (UTF-8|valid JSON)"):
+        HolderLibrary(path).entries()
+    assert not marker.exists()
+
+
+def test_code_like_strings_stay_data(tmp_path):
+    marker = tmp_path / "pwned"
+    payload = f"__import__('os').system('touch {marker}')"
+    doc = document(make_entry(NAME))
+    doc["holders"][NAME]["identifications"][0]["recording"] = payload
+    doc["holders"][NAME]["model_options"] = {"__reduce__": payload, "py/object": "os.system"}
+    path = tmp_path / "holders.json"
+    path.write_text(json.dumps(doc))
+    entry = HolderLibrary(path).get(NAME)
+    assert entry.identifications[0].recording == payload
+    assert entry.model_options["py/object"] == "os.system"
+    assert not marker.exists()
+
+
+def test_encoding_refuses_a_non_entry():
+    with pytest.raises(Exception, match="must be a HolderEntry"):
+        encode({"A": copy.deepcopy(make_entry("A").to_dict())}, "<test>")
