@@ -524,6 +524,19 @@ class HolderEntry:
         source = f"holder {self.name!r} with tool {tool.name!r} at {stickout_mm:g} mm"
         return validate(Assembly(self.holder_geometry(), tool, stickout_mm * MM, source=source))
 
+    def options(self):
+        """The stored model options as a :class:`~taptune.model.options.ModelOptions`.
+
+        Keys a newer taptune added are ignored; values the model rejects raise
+        LibraryFormatError, since predictions must use the identification's options.
+        """
+        from taptune.model.options import ModelOptions
+
+        try:
+            return ModelOptions.from_dict(self.model_options)
+        except (TypeError, ValueError) as err:
+            raise LibraryFormatError(f"holder {self.name!r}: model_options are not usable ({err})") from None
+
     def spread(self) -> dict[str, float]:
         """± half-width of each parameter over the best and the near-optimal sets (library units)."""
         sets = (self.params,) + self.param_sets
