@@ -23,15 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from taptune.errors import InputError, LibraryError
-from taptune.library.schema import (
-    PARAM_UNITS,
-    HolderEntry,
-    LibraryFormatError,
-    decode,
-    encode,
-    parse_library,
-)
-from taptune.library.store import HolderLibrary, atomic_write, atomic_write_bytes
+from taptune.library.schema import PARAM_UNITS, HolderEntry, encode
+from taptune.library.store import HolderLibrary, atomic_write, atomic_write_bytes, read_library_file
 from taptune.model.params import NAMES
 
 FORMATS = ("json", "csv")
@@ -163,20 +156,6 @@ class ImportReport:
         for c in self.conflicts:
             out.append(f"  conflict {c.name!r}: {'; '.join(c.differences)} — {action}")
         return out
-
-
-def read_library_file(path: str | os.PathLike) -> dict[str, HolderEntry]:
-    """Read and validate a holder-library JSON file (e.g. an export) without touching any library."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise LibraryFormatError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise LibraryFormatError(f"{path}: is a folder, not a holder library file") from None
-    except OSError as err:
-        raise LibraryFormatError(f"{path}: cannot read ({err.strerror})") from None
-    return parse_library(decode(raw, str(path)), str(path))
 
 
 def import_library(lib: HolderLibrary, file: str | os.PathLike, replace: bool = False) -> ImportReport:

@@ -25,7 +25,6 @@ from pathlib import Path
 
 from taptune.errors import InputError, LibraryError
 from taptune.io.assembly import (
-    CARBIDE,
     GPA,
     MM,
     Assembly,

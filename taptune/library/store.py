@@ -154,6 +154,23 @@ def _unlock(fd: int) -> None:
 # --------------------------------------------------------------------------- library
 
 
+def read_library_file(path: str | os.PathLike, missing_ok: bool = False) -> dict[str, HolderEntry]:
+    """Read and validate a holder-library JSON file; a missing file is empty if ``missing_ok``."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        if missing_ok:
+            return {}
+        raise LibraryFormatError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise LibraryFormatError(f"{path}: is a folder, not a holder library file") from None
+    except OSError as err:
+        raise LibraryFormatError(f"{path}: cannot read the holder library ({err.strerror})") from None
+    return parse_library(decode(raw, str(path)), str(path))
+
+
+
 class HolderLibrary:
     """The holder library stored in one JSON file at ``path``.
 
@@ -182,16 +199,7 @@ class HolderLibrary:
     # ---- reading
 
     def _read(self) -> dict[str, HolderEntry]:
-        source = str(self.path)
-        try:
-            raw = self.path.read_bytes()
-        except FileNotFoundError:
-            return {}
-        except IsADirectoryError:
-            raise LibraryFormatError(f"{source}: is a folder, not a holder library file") from None
-        except OSError as err:
-            raise LibraryFormatError(f"{source}: cannot read the holder library ({err.strerror})") from None
-        return parse_library(decode(raw, source), source)
+        return read_library_file(self.path, missing_ok=True)
 
     def entries(self) -> dict[str, HolderEntry]:
         """All holders by name, sorted by name (a fresh, validated read of the file)."""
