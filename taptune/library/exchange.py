@@ -325,11 +325,17 @@ def write_receptance_uff58(
     _write_output(path, lambda: atomic_write(path, write))
 
 
-def write_receptance(path: str | os.PathLike, freq_hz, H, name: str, description: str = "") -> str:
-    """Write UFF58 (``.uff``/``.unv``) or CSV (``.csv``) by the file's extension; returns the format."""
+def receptance_format(path: str | os.PathLike) -> str:
+    """``"uff58"`` for ``.uff``/``.unv``, ``"csv"`` for ``.csv``; InputError for anything else."""
     kind = RECEPTANCE_SUFFIXES.get(Path(path).suffix.lower())
     if kind is None:
         raise InputError(f"{path}: unknown receptance file type; use .uff or .unv (UFF dataset 58) or .csv")
+    return kind
+
+
+def write_receptance(path: str | os.PathLike, freq_hz, H, name: str, description: str = "") -> str:
+    """Write UFF58 (``.uff``/``.unv``) or CSV (``.csv``) by the file's extension; returns the format."""
+    kind = receptance_format(path)
     if kind == "csv":
         write_receptance_csv(path, freq_hz, H)
     else:

@@ -179,19 +179,19 @@ class HolderLibrary:
     path : str or path-like
         The library file; a missing file is an empty library (created, with its
         folders, on the first write).
-    lock_timeout : float
-        Seconds a write waits for another process's lock before giving up with a
-        :class:`~taptune.errors.LibraryError`.
+    lock_timeout : float, optional
+        Seconds a write waits for another process's lock (default :data:`LOCK_TIMEOUT_S`)
+        before giving up with a :class:`~taptune.errors.LibraryError`.
 
     Every read validates the whole file (:class:`LibraryFormatError` names the file, the
     holder and the key). Every change (:meth:`put`, :meth:`remove`, :meth:`edit`) runs
     under the lock on a fresh read of the file and replaces it atomically.
     """
 
-    def __init__(self, path: str | os.PathLike, lock_timeout: float = LOCK_TIMEOUT_S):
+    def __init__(self, path: str | os.PathLike, lock_timeout: float | None = None):
         self.path = Path(path)
         self.lock_path = self.path.with_name(self.path.name + ".lock")
-        self.lock_timeout = float(lock_timeout)
+        self.lock_timeout = float(LOCK_TIMEOUT_S if lock_timeout is None else lock_timeout)
 
     def __repr__(self) -> str:
         return f"HolderLibrary({str(self.path)!r})"
