@@ -1,0 +1,101 @@
+"""``taptune batch PATH... [--assembly FILE] [--jobs N] [--out DIR] [--library PATH] [--force] [--joint] [--report PDF] [--seed N]``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def add_parser(sub, name, help_text):
+    p = sub.add_parser(name, help=help_text, description=(
+        "Identify every WAV/FLAC recording under the given files and folders (recursively), in "
+        "parallel worker processes. Each recording uses --assembly, else the .toml with the same "
+        "stem beside it, else an assembly.toml in its folder. Writes one result JSON per recording "
+        "(as 'taptune identify --json') and summary.csv into --out, and stores the holders in the "
+        "library. One bad file never stops the batch; the exit status is 1 if any file failed. "
+        "Recordings identified before with the same content (sha256) are skipped unless --force."))
+    p.add_argument("paths", nargs="+", metavar="PATH", help="recordings or folders of recordings")
+    p.add_argument("--assembly", metavar="FILE", help="one assembly TOML for every recording")
+    p.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    p.add_argument("--out", default="taptune-batch", metavar="DIR",
+                   help="folder for the result JSONs and summary.csv (default: ./taptune-batch)")
+    p.add_argument("--library", metavar="PATH", help="holder library file (default: $TAPTUNE_LIBRARY or the user data folder)")
+    p.add_argument("--force", action="store_true", help="identify again recordings already identified with the same content")
+    p.add_argument("--joint", action="store_true",
+                   help="fit all recordings of one holder together (one parameter set per holder)")
+    p.add_argument("--report", metavar="PDF", help="write a PDF: a summary table, then one page per identified recording")
+    p.add_argument("--seed", type=int, default=0, help="random seed of every fit (default 0)")
+    p.add_argument("--no-save", action="store_true", help="do not store the holders in the library")
+    # Optimiser budget: for tests and quick looks, not for real identifications.
+    p.add_argument("--population", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--generations", type=int, default=None, help=argparse.SUPPRESS)
+    return p
+
+
+def _check(args) -> None:
+    from taptune.cli.common import output_path
+    from taptune.errors import InputError
+
+    for flag in ("jobs", "population", "generations"):
+        value = getattr(args, flag)
+        if value is not None and value < 1:
+            raise InputError(f"--{flag} must be at least 1, got {value}")
+    output_path(args.report, "report")
+
+
+def format_row(row) -> str:
+    """One line per finished recording: status, file, then f1–f3 or the message."""
+    if row.status in ("ok", "skipped") and row.model_hz[0] is not None:
+        freqs = " ".join("—" if f is None else f"{f:.0f}" for f in row.model_hz)
+        detail = f"f1–f3 {freqs} Hz" + (f"  ({row.seconds:.1f} s)" if row.seconds is not None else "")
+        if row.status == "ok" and row.message:
+            detail += f"  [{row.message}]"
+    else:
+        detail = row.message
+    return f"{row.status:<9} {row.file}  {detail}"
+
+
+def print_result(result, out_dir, stream=None) -> None:
+    """Counts, notes, where the outputs are and the list of the files that failed."""
+    stream = stream or sys.stdout
+    counts = ", ".join(f"{result.count(s)} {s}" for s in ("ok", "skipped", "failed", "error", "cancelled") if result.count(s))
+    print(f"\n{len(result.rows)} recordings: {counts}", file=stream)
+    for note in result.notes:
+        print(f"note: {note}", file=stream)
+    print(f"results: {out_dir}  (summary: {result.summary_path})", file=stream)
+    if result.failed:
+        print(f"{len(result.failed)} file{'s' if len(result.failed) > 1 else ''} failed:", file=stream)
+        for row in result.failed:
+            print(f"  {row.file}: {row.status}: {row.message}", file=stream)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from taptune.batch import BatchOptions, run_batch
+    from taptune.cli.common import ProgressBar
+
+    _check(args)
+    options = BatchOptions(
+        out_dir=Path(args.out), library=args.library, jobs=args.jobs, seed=args.seed, force=args.force,
+        joint=args.joint, save=not args.no_save, population=args.population, generations=args.generations,
+        keep_pages=bool(args.report),
+    )
+    bar = ProgressBar("batch")
+
+    def on_row(row) -> None:
+        bar.close()  # the bar shares the terminal: clear it before a line
+        print(format_row(row), flush=True)
+
+    try:
+        result = run_batch(args.paths, options, args.assembly, progress=bar, on_row=on_row)
+    finally:
+        bar.close()
+    if args.report:
+        from taptune.report.pdf import write_batch_report
+
+        write_batch_report(args.report, result.pages, result.rows)
+    print_result(result, args.out)
+    if args.report:
+        print(f"report: {args.report}")
+    return result.exit_status
