@@ -577,6 +577,21 @@ class HolderEntry:
         return replace(self, identifications=tuple(history))
 
 
+def checked_entry(entry: HolderEntry, source: str) -> HolderEntry:
+    """``entry`` as it will read back from a file: validated, with plain JSON values.
+
+    Raises LibraryFormatError naming ``source`` and the key before anything is written,
+    so a bad entry from a caller is reported as such, not as a broken library.
+    """
+    if not isinstance(entry, HolderEntry):
+        raise TypeError(f"{source}: expected a HolderEntry, got {type(entry).__name__}")
+    try:
+        text = json.dumps(entry.to_dict(), allow_nan=False)
+    except (TypeError, ValueError) as err:
+        raise LibraryFormatError(f"{source}: cannot be written as JSON ({err})") from None
+    return HolderEntry.from_dict(json.loads(text), source)
+
+
 # --------------------------------------------------------------------------- documents
 
 

@@ -26,6 +26,7 @@ from taptune.library.schema import (
     HolderEntry,
     LibraryFormatError,
     UnknownHolderError,
+    checked_entry,
     decode,
     encode,
     parse_library,
@@ -190,8 +191,22 @@ class HolderLibrary:
 
     def __init__(self, path: str | os.PathLike, lock_timeout: float | None = None):
         self.path = Path(path)
-        self.lock_path = self.path.with_name(self.path.name + ".lock")
         self.lock_timeout = float(LOCK_TIMEOUT_S if lock_timeout is None else lock_timeout)
+
+    @property
+    def target(self) -> Path:
+        """The file that is really written: ``path`` with symbolic links resolved.
+
+        Replacing a symbolic link would turn it into a plain file and silently detach the
+        library from wherever the link pointed (a shared or synced folder).
+        """
+        return Path(os.path.realpath(self.path))
+
+    @property
+    def lock_path(self) -> Path:
+        """The sidecar lock file, beside the real library file (one lock whatever the link)."""
+        target = self.target
+        return target.with_name(target.name + ".lock")
 
     def __repr__(self) -> str:
         return f"HolderLibrary({str(self.path)!r})"
@@ -247,17 +262,18 @@ class HolderLibrary:
     @contextmanager
     def _locked(self) -> Iterator[None]:
         """Hold the exclusive library lock (waits up to ``lock_timeout`` seconds)."""
+        lock_path = self.lock_path
         try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o666)
+            lock_path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(lock_path, os.O_RDWR | os.O_CREAT, 0o666)
         except OSError as err:
-            raise LibraryError(f"{self.path}: cannot create the lock file {self.lock_path} ({err.strerror})") from None
+            raise LibraryError(f"{self.path}: cannot create the lock file {lock_path} ({err.strerror})") from None
         try:
             deadline = time.monotonic() + self.lock_timeout
             while not _try_lock(fd):
                 if time.monotonic() >= deadline:
                     raise LibraryError(
-                        f"{self.path}: another process has held the library lock ({self.lock_path}) "
+                        f"{self.path}: another process has held the library lock ({lock_path}) "
                         f"for more than {self.lock_timeout:g} s; try again when it has finished"
                     )
                 time.sleep(_LOCK_POLL_S)
@@ -284,7 +300,7 @@ class HolderLibrary:
             if draft != current:
                 raw = encode(draft, str(self.path))
                 try:
-                    atomic_write_bytes(self.path, raw)
+                    atomic_write_bytes(self.target, raw)
                 except OSError as err:
                     raise LibraryError(
                         f"{self.path}: cannot write the holder library ({err.strerror}); it was not changed"
@@ -296,10 +312,10 @@ class HolderLibrary:
         An existing holder of the same name takes ``entry``'s parameters, uncertainty set,
         geometry and model options; its identification history is kept and ``entry``'s
         new records are appended (a re-identification never loses the history, even when
-        another process wrote in between).
+        another process wrote in between). ``entry`` is validated first; an invalid one
+        raises LibraryFormatError naming the key and writes nothing.
         """
-        if not isinstance(entry, HolderEntry):
-            raise TypeError(f"put() takes a HolderEntry, got {type(entry).__name__}")
+        entry = checked_entry(entry, f"{self.path}: new entry for holder {getattr(entry, 'name', '?')!r}")
         with self.edit() as holders:
             old = holders.get(entry.name)
             stored = entry if old is None else entry.superseding(old)

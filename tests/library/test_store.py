@@ -108,6 +108,25 @@ def test_write_keeps_the_file_permissions(lib):
     assert lib.path.stat().st_mode & 0o777 == 0o640
 
 
+def test_put_returns_the_entry_as_it_reads_back(lib):
+    entry = make_entry("A")
+    entry = type(entry)(**{**entry.__dict__, "model_options": {"h_max_mm": 2, "grid": (1, 2)}})
+    stored = lib.put(entry)
+    assert stored.model_options == {"h_max_mm": 2, "grid": [1, 2]}
+    assert lib.get("A") == stored
+
+
+def test_a_symlinked_library_stays_a_symlink(lib, tmp_path):
+    shared = tmp_path / "synced" / "team-holders.json"
+    HolderLibrary(shared).put(make_entry("A"))
+    lib.path.parent.mkdir(parents=True)
+    lib.path.symlink_to(shared)
+    lib.put(make_entry("B"))
+    assert lib.path.is_symlink()
+    assert HolderLibrary(shared).names() == ["A", "B"]
+    assert lib.lock_path == shared.with_name("team-holders.json.lock")
+
+
 # --------------------------------------------------------------------------- location
 
 
@@ -133,6 +152,26 @@ def test_default_path_is_the_user_data_folder(monkeypatch, tmp_path):
 
 
 # --------------------------------------------------------------------------- atomicity
+
+
+def test_write_protocol_is_fsync_file_then_replace_then_fsync_folder(lib, monkeypatch):
+    lib.put(make_entry("A"))
+    calls = []
+    real_fsync, real_replace = os.fsync, os.replace
+
+    def fsync(fd):
+        calls.append(("fsync", "folder" if os.path.isdir(f"/proc/self/fd/{fd}") else "file"))
+        real_fsync(fd)
+
+    def replace(src, dst):
+        calls.append(("replace", Path(src).parent == Path(dst).parent))
+        real_replace(src, dst)
+
+    monkeypatch.setattr(store.os, "fsync", fsync)
+    monkeypatch.setattr(store.os, "replace", replace)
+    lib.put(make_entry("B"))
+    # The temporary file lives in the library's own folder, so the rename is atomic.
+    assert calls == [("fsync", "file"), ("replace", True), ("fsync", "folder")]
 
 
 def test_crash_at_replace_leaves_the_old_file_intact(lib, monkeypatch):
