@@ -39,7 +39,9 @@ class IdentifyOptions:
     islands: int = 2  # independent GA runs, each polished; their union is the archive
     jobs: int | None = None  # processes; None = min(islands, CPU count)
     ga: GAOptions = GAOptions()
-    polish_evaluations: int = 400
+    polish_evaluations: int = 300
+    polish_starts: int = 6  # polishes from diverse good points (island bests first)
+    polish_band: float = 2.0  # archive points this far above J_min may start a polish
     objective: ObjectiveOptions = ObjectiveOptions()
     model: object | None = None  # taptune.model.ModelOptions; None = defaults
     # Near-optimal set: candidates with J <= J_min + near_abs + near_rel * J_min.
@@ -149,32 +151,33 @@ def _select_diverse(u: np.ndarray, f: np.ndarray, count: int) -> np.ndarray:
     return order[np.array(chosen)]
 
 
-# The objective and the progress counters an island sees. Set in the parent before the
+# The objective and the progress counters a worker sees. Set in the parent before the
 # worker processes fork, so the evaluators are built once and shared, never pickled.
 _STATE: dict = {}
 
 
 @dataclass(frozen=True)
-class _IslandResult:
+class _RunResult:
     u: np.ndarray
     value: float
     evaluations: int
     archive_u: np.ndarray
     archive_f: np.ndarray
-    cancelled: bool
+    cancelled: bool = False
 
 
-def _run_island(index: int) -> _IslandResult:
+def _near_band(value: float, options: IdentifyOptions) -> float:
+    return options.near_abs + options.near_rel * abs(value)
+
+
+def _ga_task(index: int) -> _RunResult:
+    """One GA island; returns its best point and the archive near it."""
     objective: Objective = _STATE["objective"]
     options: IdentifyOptions = _STATE["options"]
     counts, cancel = _STATE["counts"], _STATE["cancel"]
     seed = np.random.SeedSequence(options.seed).spawn(options.islands)[index]
-    rng = np.random.default_rng(seed)
     archive = Archive()
     start = objective.evaluations
-
-    def fun_batch(U):
-        return objective.batch(unit_to_p(U))
 
     def on_generation(generation, best):
         counts[index] = generation
@@ -184,53 +187,102 @@ def _run_island(index: int) -> _IslandResult:
 
     with threadpool_limits(1):
         try:
-            ga = genetic_algorithm(fun_batch, len(NAMES), rng, options.ga, archive, on_generation)
+            ga = genetic_algorithm(
+                lambda U: objective.batch(unit_to_p(U)), len(NAMES), np.random.default_rng(seed), options.ga,
+                archive, on_generation,
+            )
         except Cancelled:
             au, af = archive.arrays()
-            return _IslandResult(au[0], float(af[0]), objective.evaluations - start, au, af, True)
-        u, value, _ = polish(lambda x: objective(unit_to_p(x)), ga.u, options.polish_evaluations, archive=archive)
+            return _RunResult(au[0], float(af[0]), objective.evaluations - start, au[:0], af[:0], True)
     counts[index] = options.ga.generations
     au, af = archive.arrays()
-    # Only the neighbourhood of the optimum matters for the near-optimal set; keep it small.
-    keep = af <= value + 10 * (options.near_abs + options.near_rel * abs(value)) + 1.0
-    return _IslandResult(u, value, objective.evaluations - start, au[keep], af[keep], False)
+    # The polish starts and the near-optimal set come from the neighbourhood of the optimum only.
+    keep = af <= ga.value + options.polish_band + _near_band(ga.value, options)
+    return _RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep])
 
 
-def _run_islands(objective: Objective, options: IdentifyOptions, progress: ProgressCallback | None):
+def _polish_task(u0: np.ndarray) -> _RunResult:
+    """BOBYQA from one start; returns the polished point and its near-optimal trail."""
+    objective: Objective = _STATE["objective"]
+    options: IdentifyOptions = _STATE["options"]
+    if _STATE["cancel"].is_set():
+        return _RunResult(u0, Objective.BAD, 0, np.empty((0, len(u0))), np.empty(0), True)
+    archive = Archive()
+    start = objective.evaluations
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
+    au, af = archive.arrays()
+    keep = af <= value + _near_band(value, options)
+    return _RunResult(u, value, objective.evaluations - start, au[keep], af[keep])
+
+
+def _polish_starts(results: list[_RunResult], options: IdentifyOptions) -> np.ndarray:
+    """Each island's best, then diverse good points of the archives (different places on the
+    valley of equally good fits, MODEL.md §8.6), up to ``options.polish_starts``."""
+    au = np.vstack([r.archive_u for r in results] + [r.u[None, :] for r in results])
+    af = np.concatenate([r.archive_f for r in results] + [[r.value] for r in results])
+    j_min = float(af.min())
+    good = af <= j_min + options.polish_band + _near_band(j_min, options)
+    starts = [r.u for r in sorted(results, key=lambda r: r.value)]
+    for i in _select_diverse(au[good], af[good], options.polish_starts):
+        u = au[good][i]
+        if min(np.linalg.norm(u - s) for s in starts) > 0.05:
+            starts.append(u)
+    return np.array(starts[: max(options.polish_starts, len(results))])
+
+
+def _run_pool(objective: Objective, options: IdentifyOptions, progress: ProgressCallback | None):
+    """GA islands, then polishes from diverse starts; in forked processes where allowed."""
     jobs = options.jobs or min(options.islands, os.cpu_count() or 1)
-    jobs = max(1, min(jobs, options.islands))
+    jobs = max(1, jobs)
     use_processes = jobs > 1 and "fork" in mp.get_all_start_methods()
     ctx = mp.get_context("fork") if use_processes else None
     counts = ctx.Array("i", options.islands, lock=False) if ctx else [0] * options.islands
     cancel = ctx.Event() if ctx else _LocalFlag()
     total = options.islands * options.ga.generations
+    phase = {"base": 0.05, "span": 0.75}
 
     def report() -> None:
-        if progress is not None and progress(min(0.95, sum(counts) / total), "fitting the model") is False:
+        fraction = phase["base"] + phase["span"] * min(1.0, sum(counts) / total)
+        message = "fitting the model" if phase["base"] < 0.5 else "polishing near-optimal fits"
+        if progress is not None and progress(fraction, message) is False:
             cancel.set()
 
-    _STATE.update(objective=objective, options=options, counts=counts, cancel=cancel)
-    try:
-        if not use_processes:
-            results = []
-            for i in range(options.islands):
-                if progress is not None:
-                    _STATE["cancel"] = _ProgressFlag(report, cancel)
-                results.append(_run_island(i))
+    def run_tasks(pool, fn, items):
+        if pool is None:
+            out = []
+            for item in items:
+                out.append(fn(item))
                 if cancel.is_set():
                     break
-        else:
-            with ctx.Pool(jobs) as pool:
-                pending = pool.map_async(_run_island, range(options.islands))
-                while not pending.ready():
-                    pending.wait(0.1)
-                    report()
-                results = pending.get()
+            return out
+        pending = pool.map_async(fn, items, chunksize=1)
+        while not pending.ready():
+            pending.wait(0.1)
+            report()
+        return pending.get()
+
+    _STATE.update(objective=objective, options=options, counts=counts,
+                  cancel=_ProgressFlag(report, cancel) if ctx is None else cancel)
+    try:
+        pool = ctx.Pool(min(jobs, max(options.islands, options.polish_starts))) if ctx else None
+        try:
+            islands = run_tasks(pool, _ga_task, range(options.islands))
+            if cancel.is_set() or any(r.cancelled for r in islands):
+                raise Cancelled()
+            phase.update(base=0.8, span=0.0)
+            report()
+            polished = run_tasks(pool, _polish_task, list(_polish_starts(islands, options)))
+        finally:
+            if pool is not None:
+                pool.terminate()
     finally:
         _STATE.clear()
-    if cancel.is_set() or any(r.cancelled for r in results):
+    if cancel.is_set() or any(r.cancelled for r in polished):
         raise Cancelled()
-    return results
+    return islands, polished
 
 
 class _LocalFlag:
@@ -321,9 +373,10 @@ def identify(
     objective = Objective(targets, evaluators, options.objective)
 
     say(0.05, "fitting the model")
-    results = _run_islands(objective, options, progress)
+    islands, polished = _run_pool(objective, options, progress)
+    results = islands + polished
     evaluations = sum(r.evaluations for r in results)
-    best = min(results, key=lambda r: r.value)
+    best = min(polished, key=lambda r: r.value)
 
     # Near-optimal set over the union of the islands' archives.
     au = np.vstack([r.archive_u for r in results])

@@ -30,8 +30,10 @@ class GAOptions:
     mutation_probability: float | None = None  # per gene; None = 1/d
     tournament: int = 2
     elite: int = 2
-    patience: int = 20  # stop after this many generations without improvement …
-    tolerance: float = 1e-4  # … by more than this (relative to the best value + 1e-3)
+    patience: int = 15  # stop after this many generations without improvement …
+    tolerance: float = 1e-3  # … by more than tolerance × best + tolerance_abs
+    # J counts tolerances squared (MODEL.md §8.4): gains below 0.005 change no prediction.
+    tolerance_abs: float = 5e-3
 
 
 @dataclass
@@ -139,7 +141,7 @@ def genetic_algorithm(
             raise Cancelled()
         if generation > options.patience:
             old = best_hist[-options.patience - 1]
-            if old - best_hist[-1] <= options.tolerance * (abs(best_hist[-1]) + 1e-3):
+            if old - best_hist[-1] <= options.tolerance * abs(best_hist[-1]) + options.tolerance_abs:
                 break
     i = int(np.argmin(fit))
     au, af = archive.arrays()
