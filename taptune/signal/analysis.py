@@ -1,0 +1,311 @@
+"""From a recording to labeled peaks: the one call the front ends use.
+
+``analyse_recording`` = mono mix → taps → per-tap spectra and their average → noise
+spectrum between taps → peak picking → pole-fit refinement → labels. Model guidance
+(``expected_hz``, ``bounds_hz``) comes from the caller as plain arrays: this layer never
+imports the model.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from taptune.errors import InputError
+from taptune.io.audio import Recording
+from taptune.signal.labels import LabelOptions, interface_bands, interface_growth, label_peaks
+from taptune.signal.peaks import FIT_STARTS_S, Peak, pick_peaks, refine_peaks, tap_scatter
+from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
+                                     tap_segments)
+from taptune.signal.taps import Tap, find_taps, to_mono
+
+
+@dataclass(frozen=True)
+class SpectrumOptions:
+    """Every threshold of the analysis (MODEL.md §8.3); defaults as recommended there.
+
+    Times in s, frequencies in Hz, levels in dB.
+    """
+
+    tap_smooth_s: float = 0.5e-3
+    tap_threshold: float = 10.0
+    min_tap_interval_s: float = 0.3
+    pre_onset_s: float = 2e-3
+    segment_s: float = 0.25
+    fade_fraction: float = 0.1
+    max_bin_hz: float = 1.0
+    double_hit_window_s: tuple[float, float] = (2e-3, 30e-3)
+    prominence_db: float = 6.0
+    #: A peak must stand this far above the noise floor (15 dB: a single tap's noise
+    #: spectrum exceeds its median by 15 dB in ~1e-10 of the bins).
+    min_snr_db: float = 15.0
+    #: ... and this far above the median of its surroundings (see ``pick_peaks``).
+    min_local_db: float = 12.0
+    fmin_hz: float = 100.0
+    fmax_hz: float | None = None
+    max_peaks: int = 40
+    #: Peaks less than this above the noise spectrum between taps are stationary.
+    stationary_margin_db: float = 6.0
+    fit_starts_s: tuple[float, ...] = FIT_STARTS_S
+    target_rel_std: float = 1e-4
+    fit_width_factor: float = 3.0
+    grow_threshold_db: float = 10.0
+    low_snr_db: float = 30.0
+    band_table: str | None = None
+    labels: LabelOptions = field(default_factory=LabelOptions)
+
+
+@dataclass(frozen=True)
+class SpectrumAnalysis:
+    """Result of :func:`analyse_recording`.
+
+    Attributes
+    ----------
+    file : str
+    sample_rate : int
+        [Hz].
+    channels : int
+    duration_s : float
+    freq_hz : ndarray, shape (m,)
+        Uniform grid [Hz] (bin spacing ≤ 1 Hz).
+    magnitude : ndarray, shape (m,)
+        Averaged linear magnitude |S| of the used taps (DFT sum, full scale 1).
+    tap_magnitudes : ndarray, shape (k, m)
+        Per used tap.
+    noise_magnitude : ndarray, shape (m,) or None
+        Averaged magnitude of segments without a tap (same length and fade).
+    taps : list of Tap
+        All detected taps (``used`` tells which entered the average).
+    peaks : list of Peak
+        Ascending in frequency, labeled.
+    excluded_bands_hz : list of (lo, hi)
+        Interface bands used for ``local`` labels.
+    interface : str or None
+    warnings : list of str
+    """
+
+    file: str
+    sample_rate: int
+    channels: int
+    duration_s: float
+    freq_hz: np.ndarray
+    magnitude: np.ndarray
+    tap_magnitudes: np.ndarray
+    noise_magnitude: np.ndarray | None
+    taps: list[Tap]
+    peaks: list[Peak]
+    excluded_bands_hz: list[tuple[float, float]]
+    interface: str | None
+    warnings: list[str]
+
+    @property
+    def n_taps(self) -> int:
+        """Taps in the average."""
+        return sum(t.used for t in self.taps)
+
+    @property
+    def bending_peaks(self) -> list[Peak]:
+        """Bending peaks in mode order."""
+        return sorted((p for p in self.peaks if p.kind == "bending"), key=lambda p: p.mode)
+
+    @property
+    def bending_hz(self) -> list[float]:
+        """Bending frequencies [Hz], ascending (modes found)."""
+        return [p.hz for p in self.bending_peaks]
+
+    def bending_by_mode(self) -> dict[int, float]:
+        """{mode: frequency [Hz]} of the bending peaks found."""
+        return {p.mode: p.hz for p in self.bending_peaks}
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (CLI-CONTRACT.md keys first, then extras)."""
+        return {
+            "file": self.file,
+            "sample_rate": int(self.sample_rate),
+            "channels": int(self.channels),
+            "taps": int(self.n_taps),
+            "peaks": [p.to_dict() for p in self.peaks],
+            "warnings": list(self.warnings),
+            "bending_hz": [round(f, 4) for f in self.bending_hz],
+            "bending_modes": [p.mode for p in self.bending_peaks],
+            "excluded_bands_hz": [list(b) for b in self.excluded_bands_hz],
+            "interface": self.interface,
+            "duration_s": round(self.duration_s, 6),
+            "tap_details": [t.to_dict() for t in self.taps],
+        }
+
+
+def _fit_spectra_factory(mono, fs, taps, seg_n):
+    """Cached ``start_s -> (freq, spec, oversample)`` for the pole fits."""
+    n_fft = fft_length(2 * seg_n, fs, max_bin_hz=np.inf)
+
+    @functools.lru_cache(maxsize=None)
+    def fit_spectra(start_s):
+        shift = int(round(start_s * fs))
+        n = max(seg_n - shift, 8)
+        segs = tap_segments(mono, fs, taps, start_s, n, fade_fraction=0.0)
+        f, spec = spectra(segs, fs, n_fft)
+        return f, spec, n_fft / n
+
+    return fit_spectra
+
+
+def _peak_spectra(rec: Recording, o: SpectrumOptions):
+    """Taps, averaged spectrum, per-tap spectra, noise spectrum and floor of a recording."""
+    fs = rec.sample_rate
+    name = rec.name
+    x_raw = rec.samples
+    if float(np.max(np.abs(x_raw))) == 0.0:
+        raise InputError(f"{name}: the recording is silent (all samples are zero)")
+    min_len = o.pre_onset_s + 0.02
+    if rec.duration_s < min_len:
+        raise InputError(f"{name}: {rec.duration_s * 1000:.1f} ms is shorter than one tap "
+                         f"(need at least {min_len * 1000:.0f} ms)")
+    mono = to_mono(x_raw, fs, o.tap_smooth_s)
+    taps = find_taps(mono, fs, raw=x_raw, subtype=rec.subtype, smooth_s=o.tap_smooth_s,
+                     threshold=o.tap_threshold, min_interval_s=o.min_tap_interval_s,
+                     pre_onset_s=o.pre_onset_s, segment_s=o.segment_s,
+                     double_hit_window_s=o.double_hit_window_s)
+    if not taps:
+        raise InputError(f"{name}: no tap found (the recording holds only noise or a steady sound)")
+    used = [t for t in taps if t.used]
+    seg_n = int(round(o.segment_s * fs))
+    if max(t.end - t.onset for t in used) < int(0.01 * fs):
+        raise InputError(f"{name}: the tap is cut off after less than 10 ms: the recording is too short")
+    pre = -o.pre_onset_s
+    n_disp = seg_n + int(round(o.pre_onset_s * fs))
+    n_fft = fft_length(n_disp, fs, o.max_bin_hz)
+    freq, spec = spectra(tap_segments(mono, fs, used, pre, n_disp, o.fade_fraction), fs, n_fft)
+    tap_mag = np.abs(spec)
+    mag = tap_mag.mean(axis=0)
+    noise = noise_segments(mono, fs, taps, n_disp)
+    noise_mag = None
+    if noise.shape[0]:
+        noise_mag = np.abs(spectra(fade_out(noise, o.fade_fraction), fs, n_fft)[1]).mean(axis=0)
+        floor = smooth_floor(freq, noise_mag, q=50)
+    else:
+        floor = smooth_floor(freq, mag, width_hz=1000.0, q=10)
+    return mono, taps, used, seg_n, freq, tap_mag, mag, noise_mag, floor
+
+
+def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()):
+    """Detect and refine the peaks of a recording, unlabeled.
+
+    Returns
+    -------
+    dict
+        ``taps, used, freq, tap_mag, mag, noise_mag, peaks`` (list of Peak, kind "other"),
+        ``stationary`` (list of bool).
+    """
+    fs = rec.sample_rate
+    mono, taps, used, seg_n, freq, tap_mag, mag, noise_mag, floor = _peak_spectra(rec, o)
+    fmax = min(o.fmax_hz or np.inf, 0.98 * fs / 2)
+    idx, hz, lev, prom, snr, _ = pick_peaks(freq, mag, floor, prominence_db=o.prominence_db,
+                                            min_snr_db=o.min_snr_db, min_local_db=o.min_local_db,
+                                            fmin_hz=o.fmin_hz, fmax_hz=fmax, max_peaks=o.max_peaks)
+    stationary = np.zeros(len(idx), dtype=bool)
+    if noise_mag is not None:
+        for k, i in enumerate(idx):
+            near = float(np.max(noise_mag[max(i - 2, 0):i + 3]))
+            stationary[k] = 20 * np.log10(mag[i] / max(near, 1e-300)) < o.stationary_margin_db
+    # Stationary peaks (hum) are never bending or local: their parabolic frequency will do.
+    fit_spectra = _fit_spectra_factory(mono, fs, used, seg_n)
+    hz_r = np.array(hz, dtype=np.float64)
+    zeta = np.full(len(idx), np.nan)
+    ring = ~stationary
+    hz_r[ring], zeta[ring], _ = refine_peaks(freq, mag, fit_spectra, fs, idx[ring], hz[ring],
+                                             seg_s=seg_n / fs, starts_s=o.fit_starts_s,
+                                             target_rel_std=o.target_rel_std,
+                                             width_factor=o.fit_width_factor)
+    scatter = tap_scatter(freq, tap_mag, idx)
+    top = float(np.max(lev)) if len(lev) else 0.0
+    peaks = [Peak(hz=float(hz_r[k]), level_db=float(lev[k] - top), kind="other",
+                  damping_ratio=None if np.isnan(zeta[k]) else float(zeta[k]),
+                  scatter_hz=float(scatter[k]), prominence_db=float(prom[k]), snr_db=float(snr[k]))
+             for k in range(len(idx))]
+    order = np.argsort([p.hz for p in peaks])
+    return {"mono": mono, "taps": taps, "used": used, "freq": freq, "tap_mag": tap_mag, "mag": mag,
+            "noise_mag": noise_mag, "peaks": [peaks[k] for k in order],
+            "stationary": [bool(stationary[k]) for k in order]}
+
+
+def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions) -> list[str]:
+    w = []
+    n = len(taps)
+    n_clip = sum(t.clipped for t in taps)
+    n_dbl = sum(t.double_hit for t in taps)
+    n_used = sum(t.used for t in taps)
+    if n_clip:
+        w.append(f"{n_clip} of {n} taps clipped" + (": left out of the average" if n_used < n
+                                                    else ": used anyway, levels are distorted"))
+    if n_dbl:
+        w.append(f"{n_dbl} of {n} taps are double hits" + (": left out of the average" if n_used < n
+                                                           else ": used anyway"))
+    if n_used == 1:
+        w.append("a single tap: no tap-to-tap scatter; tap several times for a steadier average")
+    best = max(t.snr_db for t in taps)
+    if best < o.low_snr_db:
+        w.append(f"low signal-to-noise ratio: the loudest tap is {best:.0f} dB above the noise "
+                 f"(tap harder or move the microphone closer)")
+    return w
+
+
+def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", expected_hz=None,
+                      bounds_hz=None, options: SpectrumOptions = SpectrumOptions(),
+                      interface_tap: Recording | None = None) -> SpectrumAnalysis:
+    """Find the taps, average their spectra, pick, refine and label the peaks.
+
+    Parameters
+    ----------
+    recording : Recording
+        Taps on the tool tip.
+    interface : str or None
+        Spindle interface (``Assembly.holder.interface``) for the local-mode band.
+    expected_hz : array_like, shape (n,), optional
+        Model bending frequencies [Hz] (nominal or library parameters).
+    bounds_hz : array_like, shape (n, 2), optional
+        Physical (lo, hi) bounds per bending mode [Hz] (MODEL.md §7.6).
+    options : SpectrumOptions
+    interface_tap : Recording, optional
+        Taps on the interface itself: the peaks that grow there are its local modes.
+
+    Returns
+    -------
+    SpectrumAnalysis
+
+    Raises
+    ------
+    InputError
+        Silent, too short, no tap, or no peak at all.
+    """
+    o = options
+    name = recording.name
+    r = find_spectral_peaks(recording, o)
+    peaks = r["peaks"]
+    if not peaks:
+        raise InputError(f"{name}: no spectral peak stands out of the noise")
+    warnings = _tap_warnings(r["taps"], name, o)
+    bands, w = interface_bands(interface, o.band_table)
+    if w:
+        warnings.append(w)
+    growth = None
+    if interface_tap is not None:
+        ri = find_spectral_peaks(interface_tap, o)
+        growth = interface_growth(peaks, ri["peaks"])
+    nyq = recording.sample_rate / 2
+    if expected_hz is not None and len(expected_hz) and float(np.max(expected_hz)) > 0.9 * nyq:
+        warnings.append(f"sample rate {recording.sample_rate} Hz: the expected bending mode at "
+                        f"{float(np.max(expected_hz)):.0f} Hz is above 0.9 x Nyquist; record at "
+                        f"a higher rate (96 kHz)")
+    labeled, lw = label_peaks(peaks, bands=bands, expected_hz=expected_hz, bounds_hz=bounds_hz,
+                              stationary=r["stationary"], growth_db=growth,
+                              grow_threshold_db=o.grow_threshold_db, options=o.labels)
+    warnings.extend(lw)
+    return SpectrumAnalysis(
+        file=recording.path, sample_rate=recording.sample_rate, channels=recording.channels,
+        duration_s=recording.duration_s, freq_hz=r["freq"], magnitude=r["mag"],
+        tap_magnitudes=r["tap_mag"], noise_magnitude=r["noise_mag"], taps=r["taps"],
+        peaks=labeled, excluded_bands_hz=list(bands) if growth is None else [],
+        interface=interface, warnings=warnings)

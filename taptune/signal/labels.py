@@ -1,0 +1,320 @@
+"""Peak labels (MODEL.md §8.3): ``bending`` modes 1–3, ``local`` interface modes, ``other``.
+
+*local* — the spindle interface's own modes. They are known only as frequency bands
+per interface (HSK-A63: 9.35–10.55 kHz around the published 9.7 and 10.2 kHz, wide
+enough for the few percent they move from holder to holder); the table is extendable by
+a TOML/JSON file. A second recording tapped on the interface itself marks them exactly:
+the peaks that grow.
+
+*bending* — with model guidance (``expected_hz`` from nominal or library parameters,
+``bounds_hz`` from §7.6) the three modes are assigned *jointly*: every ascending choice
+of peaks inside the modes' bounds is scored by how well one explanation accounts for
+all of them — a shift common to all modes (material factors) plus a contact shift that
+moves each mode in proportion to its distance from its rigid-contact bound (contact-
+sensitive modes move much, holder modes hardly). A spurious peak that happens to lie
+nearer one expected frequency than the true mode then loses, because it asks the other
+modes to have moved the other way. The interface band never silently removes a peak the
+model claims; it only adds a small cost. Without guidance the three most prominent
+peaks outside the bands are a best guess.
+
+*other* — everything else: stationary peaks (hum and its harmonics, present between
+taps), axial and torsional modes, doublet partners, room and table resonances.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from taptune.errors import InputError
+from taptune.signal.peaks import Peak
+
+#: Built-in local-mode bands [Hz] per spindle interface.
+BUILTIN_BANDS: dict[str, tuple[tuple[float, float], ...]] = {
+    "HSK-A63": ((9350.0, 10550.0),),
+}
+#: Environment variable naming an extra band table (TOML or JSON).
+BANDS_ENV = "TAPTUNE_INTERFACE_BANDS"
+
+
+def _norm(name: str) -> str:
+    return "".join(ch for ch in str(name).upper() if ch.isalnum())
+
+
+def load_band_table(path) -> dict[str, tuple[tuple[float, float], ...]]:
+    """Read a user table of interface local-mode bands.
+
+    The file (TOML or JSON) maps interface names to lists of ``[lo_hz, hi_hz]`` pairs,
+    either directly (``"HSK-A100" = [[6100, 6900]]``) or under a ``local_hz`` key
+    (``[interfaces."HSK-A100"] local_hz = [[6100, 6900]]``; an ``interfaces`` table is
+    optional).
+
+    Raises
+    ------
+    InputError
+        Unreadable file or malformed entries (names the file and the entry).
+    """
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as err:
+        raise InputError(f"{path}: cannot read interface band table ({err.strerror or err})") from None
+    try:
+        data = json.loads(text) if p.suffix.lower() == ".json" else tomllib.loads(text)
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as err:
+        raise InputError(f"{path}: not a valid band table ({' '.join(str(err).split())})") from None
+    if isinstance(data, dict) and isinstance(data.get("interfaces"), dict):
+        data = data["interfaces"]
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: a band table maps interface names to [[lo_hz, hi_hz], ...]")
+    table = {}
+    for name, entry in data.items():
+        if isinstance(entry, dict):
+            entry = entry.get("local_hz", [])
+        try:
+            bands = tuple((float(lo), float(hi)) for lo, hi in entry)
+        except (TypeError, ValueError):
+            raise InputError(f"{path}: interface {name!r}: bands must be [[lo_hz, hi_hz], ...]") from None
+        for lo, hi in bands:
+            if not (0 < lo < hi):
+                raise InputError(f"{path}: interface {name!r}: band [{lo}, {hi}] must have 0 < lo < hi")
+        table[str(name)] = bands
+    return table
+
+
+def interface_bands(interface: str | None, table_path=None) -> tuple[tuple[tuple[float, float], ...], str | None]:
+    """Local-mode bands [Hz] of a spindle interface, and a warning when none are known.
+
+    Looks in ``table_path``, then the file named by ``$TAPTUNE_INTERFACE_BANDS``, then
+    the built-in table; names match ignoring case, spaces and dashes.
+
+    Returns
+    -------
+    bands : tuple of (lo_hz, hi_hz)
+    warning : str or None
+    """
+    if not interface:
+        return (), None
+    tables = []
+    for src in (table_path, os.environ.get(BANDS_ENV)):
+        if src:
+            tables.append(load_band_table(src))
+    tables.append(BUILTIN_BANDS)
+    key = _norm(interface)
+    for t in tables:
+        for name, bands in t.items():
+            if _norm(name) == key:
+                return tuple(bands), None
+    return (), (f"no local-mode band known for interface {interface!r}: its local modes are "
+                f"not excluded (add it to a band table, see ${BANDS_ENV})")
+
+
+def in_bands(hz: float, bands) -> bool:
+    """Whether ``hz`` lies inside any (lo, hi) band."""
+    return any(lo <= hz <= hi for lo, hi in bands)
+
+
+@dataclass(frozen=True)
+class LabelOptions:
+    """Weights of the joint bending assignment (see module docstring).
+
+    sigma_mode : float
+        Spread of a mode's log-frequency around the two-term explanation.
+    sigma_common : float
+        Prior spread of the shift common to all modes (material factors, model error).
+    sigma_contact : float
+        Prior spread of the contact shift, in units of each mode's distance to its
+        rigid-contact bound.
+    missing_cost : float
+        Cost of leaving a mode unassigned.
+    band_cost : float
+        Extra cost of taking a peak inside an interface band as a bending mode.
+    weak_prominence_db : float
+        Peaks less prominent than this pay up to 1 unit, in proportion.
+    min_guess_hz : float
+        Without model guidance, bending guesses are taken above this frequency
+        (free-free tool-holder assemblies have f1 of a few kHz).
+    max_candidates : int
+        Candidates per mode considered (the nearest to the expected frequency).
+    """
+
+    sigma_mode: float = 0.02
+    sigma_common: float = 0.04
+    sigma_contact: float = 2.0
+    missing_cost: float = 6.0
+    band_cost: float = 1.0
+    weak_prominence_db: float = 12.0
+    min_guess_hz: float = 1000.0
+    max_candidates: int = 8
+
+
+def _explain_cost(r, w, o: LabelOptions) -> float:
+    """Min over (c, q) of Σ((r − c − q·w)/σ)² + (c/σ_c)² + (q/σ_q)²; r, w shape (n,)."""
+    a = np.column_stack([np.ones_like(w), w]) / o.sigma_mode
+    b = r / o.sigma_mode
+    prior = np.diag([1 / o.sigma_common**2, 1 / o.sigma_contact**2])
+    coef = np.linalg.solve(a.T @ a + prior, a.T @ b)
+    res = b - a @ coef
+    return float(res @ res + coef @ prior @ coef)
+
+
+def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
+                   candidates=None, options: LabelOptions = LabelOptions()) -> list[int | None]:
+    """Choose the peak of each bending mode with model guidance.
+
+    Parameters
+    ----------
+    peaks : list of Peak
+        Ascending in frequency.
+    expected_hz : array_like, shape (n,)
+        Model bending frequencies [Hz], ascending.
+    bounds_hz : array_like, shape (n, 2), optional
+        Physical (lo, hi) bounds per mode [Hz] (MODEL.md §7.6); without them each mode
+        may be within ±30 % of its expected frequency and the rigid bound is taken
+        10 % above it.
+    bands : sequence of (lo, hi)
+        Interface bands [Hz].
+    candidates : sequence of bool, optional
+        Which peaks may be bending at all (default all).
+
+    Returns
+    -------
+    list of (int or None), length n
+        Index into ``peaks`` per mode, None where no peak is assigned.
+    """
+    e = np.asarray(expected_hz, dtype=np.float64)
+    n = e.size
+    if bounds_hz is None:
+        bnd = np.column_stack([e / 1.3, e * 1.3])
+        hi_rigid = e * 1.1
+    else:
+        bnd = np.asarray(bounds_hz, dtype=np.float64).reshape(n, 2)
+        hi_rigid = bnd[:, 1]
+    # Each mode's sensitivity to the contact: log-distance from nominal to its upper bound.
+    w = np.maximum(np.log(np.maximum(hi_rigid, e * 1.001) / e), 0.005)
+    ok = [True] * len(peaks) if candidates is None else list(candidates)
+    hz = np.array([p.hz for p in peaks])
+    per_mode = []
+    for m in range(n):
+        idx = [i for i in range(len(peaks)) if ok[i] and bnd[m, 0] <= hz[i] <= bnd[m, 1]]
+        idx.sort(key=lambda i: abs(np.log(hz[i] / e[m])))
+        per_mode.append(idx[:options.max_candidates] + [None])
+    unit = np.array([
+        (options.band_cost if in_bands(p.hz, bands) else 0.0)
+        + max(0.0, (options.weak_prominence_db - p.prominence_db) / options.weak_prominence_db)
+        for p in peaks
+    ])
+    best, best_cost = [None] * n, np.inf
+    for combo in itertools.product(*per_mode):
+        chosen = [(m, i) for m, i in enumerate(combo) if i is not None]
+        fs = [hz[i] for _, i in chosen]
+        if any(b <= a for a, b in zip(fs, fs[1:])):
+            continue  # modes are ordered and distinct
+        cost = options.missing_cost * (n - len(chosen))
+        if chosen:
+            ms = np.array([m for m, _ in chosen])
+            r = np.log(np.array(fs) / e[ms])
+            cost += _explain_cost(r, w[ms], options) + float(sum(unit[i] for _, i in chosen))
+        if cost < best_cost:
+            best, best_cost = list(combo), cost
+    return best
+
+
+def interface_growth(peaks: list[Peak], iface_peaks: list[Peak], tol_rel: float = 2e-3) -> list[float | None]:
+    """Level change [dB] of each peak from the tool-tip tap to the interface tap.
+
+    Levels are relative to each recording's loudest peak; the median change over the
+    matched peaks is removed, so "grows" means grows relative to the rest. Peaks with
+    no partner within ``tol_rel`` (relative frequency) get None.
+    """
+    if not iface_peaks:
+        return [None] * len(peaks)
+    fi = np.array([q.hz for q in iface_peaks])
+    raw = []
+    for p in peaks:
+        j = int(np.argmin(np.abs(fi - p.hz)))
+        raw.append(iface_peaks[j].level_db - p.level_db if abs(fi[j] - p.hz) <= tol_rel * p.hz else None)
+    vals = [g for g in raw if g is not None]
+    if not vals:
+        return raw
+    med = float(np.median(vals))
+    return [None if g is None else g - med for g in raw]
+
+
+def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None,
+                stationary=None, growth_db=None, grow_threshold_db: float = 10.0,
+                n_modes: int = 3, options: LabelOptions = LabelOptions()) -> tuple[list[Peak], list[str]]:
+    """Label peaks ``bending`` / ``local`` / ``other``.
+
+    Parameters
+    ----------
+    peaks : list of Peak
+        Ascending in frequency.
+    bands : sequence of (lo, hi)
+        Interface local-mode bands [Hz].
+    expected_hz, bounds_hz : array_like, optional
+        Model guidance, shapes (n,) and (n, 2) [Hz].
+    stationary : sequence of bool, optional
+        Peaks also present between taps (hum, room noise): never bending or local.
+    growth_db : sequence of (float or None), optional
+        Growth on an interface tap (:func:`interface_growth`); peaks growing by at least
+        ``grow_threshold_db`` are local and then the bands are not needed.
+    n_modes : int
+        Bending modes sought without guidance.
+
+    Returns
+    -------
+    peaks : list of Peak
+        Same order, with ``kind``, ``mode`` and ``note`` set.
+    warnings : list of str
+    """
+    warnings: list[str] = []
+    p = len(peaks)
+    stat = [False] * p if stationary is None else list(stationary)
+    grown = [False] * p
+    if growth_db is not None:
+        grown = [g is not None and g >= grow_threshold_db for g in growth_db]
+    use_bands = bands if growth_db is None else ()
+    cand = [not stat[i] and not grown[i] for i in range(p)]
+    if expected_hz is not None and len(expected_hz):
+        modes = assign_bending(peaks, expected_hz, bounds_hz, use_bands, candidates=cand, options=options)
+        n_sought = len(modes)
+    else:
+        pool = [i for i in range(p) if cand[i] and not in_bands(peaks[i].hz, use_bands)
+                and peaks[i].hz >= options.min_guess_hz]
+        pool = sorted(sorted(pool, key=lambda i: -peaks[i].prominence_db)[:n_modes], key=lambda i: peaks[i].hz)
+        modes = pool + [None] * (n_modes - len(pool))
+        n_sought = n_modes
+        if pool:
+            warnings.append("no assembly given: the bending labels are a best guess "
+                            "(the most prominent peaks outside the interface band)")
+    mode_of = {i: m + 1 for m, i in enumerate(modes) if i is not None}
+    out = []
+    for i, pk in enumerate(peaks):
+        if i in mode_of:
+            note = "bending (model)" if expected_hz is not None else "bending (guess)"
+            if in_bands(pk.hz, use_bands):
+                note += ", inside the interface band"
+            out.append(replace(pk, kind="bending", mode=mode_of[i], note=note))
+        elif grown[i]:
+            out.append(replace(pk, kind="local", mode=None, note="grows on the interface tap"))
+        elif stat[i]:
+            out.append(replace(pk, kind="other", mode=None, note="stationary (hum or noise)"))
+        elif in_bands(pk.hz, use_bands):
+            out.append(replace(pk, kind="local", mode=None, note="interface band"))
+        else:
+            out.append(replace(pk, kind="other", mode=None, note=""))
+    found = sorted(mode_of.values())
+    if not found:
+        warnings.append("no bending peak found")
+    elif len(found) < n_sought:
+        missing = [m for m in range(1, n_sought + 1) if m not in found]
+        warnings.append(f"only {len(found)} of {n_sought} bending modes found "
+                        f"(missing mode {', '.join(map(str, missing))})")
+    return out, warnings

@@ -1,0 +1,397 @@
+"""Peaks: picking on the averaged spectrum, then sub-bin refinement by a pole fit.
+
+Picking follows MODEL.md §8.3 (local maxima of the dB spectrum with a prominence
+threshold, parabolic interpolation over three bins). Parabolic interpolation is biased
+by the neighbouring modes, the background and the zero-padding grid, by up to a few
+0.01 % — as large as the accuracy we need. So each peak is refined by fitting the taps'
+*complex* spectra around it with the exact DFT of a decaying sinusoid (one pole shared
+by all taps, its own complex amplitude per tap) plus a complex linear background that
+absorbs the other modes' tails, reflections and the onset uncertainty. Variable
+projection leaves two nonlinear unknowns per pole: the damped frequency and the decay
+rate; the residues and the background come from a linear least-squares solve.
+
+Frequencies are reported as the model defines them (MODEL.md §13: ``sqrt(Re λ)/2π``
+of the eigenvalue λ = −s² of the pole s = −σ + iω_d): f = √(ω_d² − σ²)/2π and
+ζ = Im λ / (2 Re λ) = ω_d σ / (ω_d² − σ²).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.signal import find_peaks
+
+
+@dataclass(frozen=True)
+class Peak:
+    """A spectral peak.
+
+    Attributes
+    ----------
+    hz : float
+        Refined frequency [Hz] (undamped, as the model defines it).
+    level_db : float
+        Averaged spectrum at the peak [dB re the loudest peak].
+    kind : str
+        ``"bending"``, ``"local"`` or ``"other"``.
+    mode : int or None
+        1, 2, 3 for bending peaks.
+    damping_ratio : float or None
+        ζ from the pole fit (None when the fit failed).
+    scatter_hz : float
+        Standard deviation of the peak frequency from tap to tap [Hz] (0 for one tap).
+    prominence_db : float
+        Prominence in the averaged dB spectrum.
+    snr_db : float
+        Peak over the spectrum's floor [dB].
+    note : str
+        Why it got its kind (e.g. ``"interface band"``, ``"stationary (hum)"``).
+    """
+
+    hz: float
+    level_db: float
+    kind: str = "other"
+    mode: int | None = None
+    damping_ratio: float | None = None
+    scatter_hz: float = 0.0
+    prominence_db: float = 0.0
+    snr_db: float = 0.0
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        """Plain dict for JSON (contract keys ``hz, level_db, kind`` first)."""
+        d = asdict(self)
+        return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in d.items()}
+
+
+def parabolic_peak(y, i):
+    """Vertex of the parabola through ``y[i-1], y[i], y[i+1]``: (offset in bins, height)."""
+    y = np.asarray(y, dtype=np.float64)
+    i = np.asarray(i)
+    a, b, c = y[i - 1], y[i], y[i + 1]
+    den = a - 2 * b + c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.where(den < 0, 0.5 * (a - c) / den, 0.0)
+    d = np.clip(d, -0.5, 0.5)
+    return d, b - 0.25 * (a - c) * d
+
+
+def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: float = 15.0,
+               min_local_db: float = 12.0, ring_hz: float = 500.0, fmin_hz: float = 100.0,
+               fmax_hz: float | None = None, max_peaks: int = 40):
+    """Local maxima of the dB spectrum that stand out from their surroundings and the floor.
+
+    Prominence alone is a poor test on a noisy spectrum: the nulls of a noise-like
+    spectrum make its bumps look prominent. A peak must also stand ``min_local_db``
+    above the median of a ring around it (from 4 half-power widths out to
+    ``ring_hz`` beyond), which a bump of a noise-like spectrum does in ~1e-5 of the
+    bins (Rayleigh statistics), and ``min_snr_db`` above ``floor``.
+
+    Parameters
+    ----------
+    freq_hz, mag, floor : ndarray, shape (m,)
+        Uniform grid [Hz], linear magnitude and the noise floor (same units).
+    prominence_db : float
+        Minimum prominence in the dB spectrum.
+    min_snr_db : float
+        Minimum height above ``floor`` [dB].
+    min_local_db : float
+        Minimum height above the median of the ring around the peak [dB].
+    ring_hz : float
+        Width of that ring on each side [Hz].
+    fmin_hz, fmax_hz : float
+        Band searched [Hz].
+    max_peaks : int
+        Keep at most this many, those standing highest above their ring.
+
+    Returns
+    -------
+    idx : ndarray of int, shape (p,)
+        Bin of each peak, ascending.
+    hz : ndarray, shape (p,)
+        Parabolic-interpolated frequency [Hz].
+    level_db : ndarray, shape (p,)
+        Interpolated level [dB re the linear unit of ``mag``].
+    prominence_db : ndarray, shape (p,)
+    local_db : ndarray, shape (p,)
+        Height above the ring median [dB].
+    hw_hz : ndarray, shape (p,)
+        Half-power half-width [Hz].
+    """
+    f = np.asarray(freq_hz)
+    m = np.asarray(mag, dtype=np.float64)
+    db = 20 * np.log10(m + 1e-300)
+    fl = 20 * np.log10(np.asarray(floor) + 1e-300)
+    df = f[1] - f[0]
+    lo = max(int(np.ceil(fmin_hz / df)), 1)
+    hi = min(int(fmax_hz / df) if fmax_hz else f.size - 2, f.size - 2)
+    idx, props = find_peaks(db[lo:hi + 1], prominence=prominence_db)
+    idx = idx + lo
+    prom = props["prominences"]
+    keep = db[idx] - fl[idx] >= min_snr_db
+    idx, prom = idx[keep], prom[keep]
+    hw = np.array([half_power_width(f, m, int(i)) for i in idx])
+    ring = int(round(ring_hz / df))
+    local = np.zeros(idx.size)
+    for k, i in enumerate(idx):
+        w_in = max(int(np.ceil(4 * hw[k] / df)), 3)
+        left = db[max(i - w_in - ring, 0):max(i - w_in, 0)]
+        right = db[i + w_in:i + w_in + ring]
+        around = np.concatenate([left, right])
+        local[k] = db[i] - (np.median(around) if around.size else -np.inf)
+    keep = local >= min_local_db
+    idx, prom, local, hw = idx[keep], prom[keep], local[keep], hw[keep]
+    if idx.size > max_peaks:
+        top = np.sort(np.argsort(local)[::-1][:max_peaks])
+        idx, prom, local, hw = idx[top], prom[top], local[top], hw[top]
+    d, lev = parabolic_peak(db, idx)
+    return idx, f[idx] + d * df, lev, prom, local, hw
+
+
+def half_power_width(freq_hz, mag, i: int, max_hz: float = 2000.0) -> float:
+    """Half-power (−3 dB) half-width of the peak at bin ``i`` [Hz], from the magnitude.
+
+    Each side walks out to the first bin below the half-power level, stepping over
+    small ripples (reflections, noise) but not over a higher peak; the narrower side
+    counts (a neighbouring mode widens only one side). At most ``max_hz``.
+    """
+    m = np.asarray(mag)
+    df = freq_hz[1] - freq_hz[0]
+    n_max = max(int(max_hz / df), 1)
+    target = m[i] / np.sqrt(2.0)
+    widths = []
+    for seg in (m[i + 1:i + 1 + n_max], m[max(i - n_max, 0):i][::-1]):
+        below = np.flatnonzero(seg < target)
+        higher = np.flatnonzero(seg > m[i])
+        k = below[0] + 1 if below.size else seg.size
+        if higher.size and higher[0] < k:
+            k = higher[0] + 1
+        widths.append(k)
+    return float(min(widths)) * df
+
+
+def _basis(freq_hz, poles, sample_rate, f_c, w):
+    """Columns: one decaying sinusoid per pole (exact DFT), then 1 and (f − f_c)/w."""
+    f = np.asarray(freq_hz)[:, None]
+    fd = poles[:, 0][None, :]
+    sig = poles[:, 1][None, :]
+    z = np.exp((-sig + 2j * np.pi * (fd - f)) / sample_rate)
+    # 1/(1 − z) is the DFT of z^n, n = 0…∞; scaled by 1/fs so the columns are O(1/σ).
+    modes = 1.0 / ((1.0 - z) * sample_rate)
+    bg = np.ones((f.shape[0], 2), dtype=complex)
+    bg[:, 1] = (f[:, 0] - f_c) / w
+    return np.hstack([modes, bg])
+
+
+def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz: float):
+    """Fit poles shared by all taps to complex spectra in the band [lo_hz, hi_hz].
+
+    Parameters
+    ----------
+    freq_hz : ndarray, shape (m,)
+        Grid [Hz].
+    spec : ndarray, shape (k, m), complex
+        Per-tap complex spectra of segments starting just after the onset.
+    sample_rate : float
+        [Hz].
+    f0, sigma0 : array_like, shape (j,)
+        Starting damped frequencies [Hz] and decay rates σ [1/s].
+    lo_hz, hi_hz : float
+        Band fitted [Hz].
+
+    Returns
+    -------
+    fd : ndarray, shape (j,)
+        Damped frequencies ω_d/2π [Hz].
+    sigma : ndarray, shape (j,)
+        Decay rates [1/s].
+    std_fd : ndarray, shape (j,)
+        Standard error of ``fd`` [Hz] from the residual and the Jacobian, for
+        uncorrelated bins (multiply the variance by the zero-padding factor).
+    ok : bool
+        The fit converged inside the band with positive decay.
+    """
+    f = np.asarray(freq_hz)
+    sel = (f >= lo_hz) & (f <= hi_hz)
+    fw = f[sel]
+    y = np.asarray(spec)[:, sel].T  # (m, k)
+    f0 = np.atleast_1d(np.asarray(f0, dtype=np.float64))
+    s0 = np.maximum(np.atleast_1d(np.asarray(sigma0, dtype=np.float64)), 1.0)
+    j = f0.size
+    f_c = 0.5 * (lo_hz + hi_hz)
+    w = max(0.5 * (hi_hz - lo_hz), 1e-9)
+    scale = np.max(np.abs(y)) + 1e-300
+    y = y / scale
+
+    def resid(theta):
+        poles = np.column_stack([f_c + w * theta[:j], np.exp(theta[j:])])
+        b = _basis(fw, poles, sample_rate, f_c, w)
+        c, *_ = np.linalg.lstsq(b, y, rcond=None)
+        r = y - b @ c
+        return np.concatenate([r.real.ravel(), r.imag.ravel()])
+
+    x0 = np.concatenate([(f0 - f_c) / w, np.log(s0)])
+    lb = np.concatenate([np.full(j, -1.0), np.full(j, np.log(0.05))])
+    ub = np.concatenate([np.full(j, 1.0), np.full(j, np.log(2 * np.pi * w * 4 + 10.0))])
+    x0 = np.clip(x0, lb + 1e-9, ub - 1e-9)
+    try:
+        res = least_squares(resid, x0, bounds=(lb, ub), method="trf", x_scale="jac",
+                            xtol=1e-10, ftol=1e-10, max_nfev=60 * (2 * j + 1))
+    except (ValueError, np.linalg.LinAlgError):
+        return f0, s0, np.full(j, np.inf), False
+    fd = f_c + w * res.x[:j]
+    sig = np.exp(res.x[j:])
+    inside = np.all(np.abs(res.x[:j]) < 0.98) and np.all(res.x[j:] < ub[j:] - 1e-3)
+    n_res = res.fun.size
+    n_par = 2 * j + 2 * y.shape[1] * (j + 2)
+    s2 = 2 * res.cost / max(n_res - n_par, 1)
+    try:
+        cov = s2 * np.linalg.pinv(res.jac.T @ res.jac)
+        std = w * np.sqrt(np.maximum(np.diag(cov)[:j], 0.0))
+    except np.linalg.LinAlgError:
+        std = np.full(j, np.inf)
+    return fd, sig, std, bool(res.success and inside)
+
+
+def undamped(fd_hz, sigma):
+    """Model-convention frequency [Hz] and ζ from a pole's damped frequency and decay rate."""
+    fd = np.asarray(fd_hz, dtype=np.float64)
+    s = np.asarray(sigma, dtype=np.float64) / (2 * np.pi)
+    re = np.maximum(fd**2 - s**2, 1e-300)
+    return np.sqrt(re), fd * s / re
+
+
+#: Segment starts tried by the refinement, latest first [s after the onset].
+FIT_STARTS_S = (30e-3, 20e-3, 15e-3, 10e-3, 6e-3, 4e-3, 3e-3, 2e-3, 1.5e-3, 1e-3, 0.5e-3)
+
+
+def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
+                 seg_s: float, min_retained: float = 1e-3, starts_s=FIT_STARTS_S,
+                 target_rel_std: float = 1e-4, width_factor: float = 3.0,
+                 max_width_hz: float = 600.0):
+    """Refine picked peaks by pole fits; group peaks whose fit bands overlap.
+
+    A reflection arriving ``d`` seconds after the tap multiplies the spectrum by
+    ``1 + g exp(-iωd)``, which skews a wide peak by up to ~γ²·g·d (0.1 % for a 1 %
+    damped mode and a 1 ms, −12 dB reflection). After the last reflection has arrived
+    the signal is again a pure sum of decaying sinusoids, so each peak is fitted with
+    the latest segment start whose frequency standard error is still below
+    ``target_rel_std`` (the earliest start if none is).
+
+    Parameters
+    ----------
+    freq_hz : ndarray, shape (m,)
+        Grid of ``mag`` [Hz].
+    mag : ndarray, shape (m,)
+        Averaged magnitude (for the starting half-widths).
+    fit_spectra : callable
+        ``fit_spectra(start_s) -> (freq_hz, spec, oversample)``: per-tap complex spectra
+        (k, m') of segments starting ``start_s`` after each onset, their grid and
+        the zero-padding factor (FFT length / segment length).
+    sample_rate : float
+        [Hz].
+    idx, hz0 : ndarray, shape (p,)
+        Picked bins and their parabolic frequencies [Hz].
+    seg_s : float
+        Segment length [s]; the native resolution 1/seg_s sets the narrowest band.
+    starts_s : sequence of float
+        Segment starts tried, latest first [s after onset].
+    min_retained : float
+        Starts where a mode's amplitude (estimated from its half-power width) has
+        decayed below this fraction are skipped: there the fit would lock onto noise.
+    target_rel_std : float
+        Largest acceptable relative standard error of a refined frequency; when no
+        start meets it, the latest start meeting 3, 10 times it, or the earliest.
+    width_factor : float
+        Band half-width in half-power half-widths.
+    max_width_hz : float
+        Widest band half-width [Hz].
+
+    Returns
+    -------
+    hz : ndarray, shape (p,)
+        Refined (undamped) frequency [Hz]; the parabolic one where every fit failed.
+    zeta : ndarray, shape (p,)
+        Damping ratio (NaN where every fit failed).
+    std_hz : ndarray, shape (p,)
+        Standard error of ``hz`` [Hz] (inf where every fit failed).
+    """
+    f = np.asarray(freq_hz)
+    p = len(idx)
+    hz = np.array(hz0, dtype=np.float64)
+    zeta = np.full(p, np.nan)
+    std_hz = np.full(p, np.inf)
+    if p == 0:
+        return hz, zeta, std_hz
+    hw = np.array([half_power_width(f, mag, int(i)) for i in idx])
+    hw = np.maximum(hw, 0.5 / seg_s)
+    half = np.clip(width_factor * hw, 3.0 / seg_s, max_width_hz)
+    lo = hz - half
+    hi = hz + half
+    # Group peaks whose bands overlap: one fit with several poles.
+    groups = [[0]]
+    for i in range(1, p):
+        if lo[i] <= max(hi[g] for g in groups[-1]):
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    for g in groups:
+        g = np.array(g)
+        if g.size > 4:  # a dense cluster of noise peaks: not worth a joint fit
+            continue
+        band_lo, band_hi = float(np.min(lo[g])), float(np.max(hi[g]))
+        f_start, s_start = hz[g], 2 * np.pi * hw[g]
+        # The narrowest resolvable half-width is ~1/(2T): above it the width is the decay.
+        s_decay = np.maximum(s_start - np.pi / seg_s, 0.0)
+        t_max = np.log(1.0 / min_retained) / max(float(np.max(s_decay)), 1e-9)
+        tried = [ts for ts in starts_s if ts <= t_max] or [min(starts_s)]
+        fits = []
+        for ts in tried:
+            ff, spec, ovs = fit_spectra(ts)
+            fd, sig, sd, ok = fit_poles(ff, spec, sample_rate, f_start, s_start, band_lo, band_hi)
+            if not ok:
+                continue
+            fu, z = undamped(fd, sig)
+            sd = sd * np.sqrt(ovs)
+            # A fit that wandered to another peak, or to a noise spike much narrower than
+            # the peak, is not a refinement of this one.
+            near = np.abs(fu - hz[g]) < np.maximum(hw[g], 2.0 / seg_s)
+            if not np.all(near) or np.any(sig < 0.2 * s_decay):
+                continue
+            fits.append((fu, z, sd))
+            if np.all(sd <= target_rel_std * fu):
+                break
+        # The latest start meeting the target; failing that, a looser one, and so on.
+        for tier in (1.0, 3.0, 10.0, np.inf):
+            ok_fits = [fit for fit in fits if np.all(fit[2] <= tier * target_rel_std * fit[0])]
+            if ok_fits:
+                hz[g], zeta[g], std_hz[g] = ok_fits[0]
+                break
+    return hz, zeta, std_hz
+
+
+def tap_scatter(freq_hz, tap_mag, idx) -> np.ndarray:
+    """Standard deviation over taps of each peak's parabolic frequency [Hz], shape (p,).
+
+    ``tap_mag`` (k, m) are the taps' magnitude spectra; each tap's maximum is sought
+    within ±2 bins of the averaged peak bin ``idx`` (p,).
+    """
+    t = np.asarray(tap_mag)
+    if t.shape[0] < 2 or len(idx) == 0:
+        return np.zeros(len(idx))
+    f = np.asarray(freq_hz)
+    df = f[1] - f[0]
+    db = 20 * np.log10(t + 1e-300)
+    out = np.zeros(len(idx))
+    for n, i in enumerate(idx):
+        a, b = max(int(i) - 2, 1), min(int(i) + 3, f.size - 1)
+        loc = a + np.argmax(db[:, a:b], axis=1)
+        loc = np.clip(loc, 1, f.size - 2)
+        rows = np.arange(t.shape[0])
+        y0, y1, y2 = db[rows, loc - 1], db[rows, loc], db[rows, loc + 1]
+        den = y0 - 2 * y1 + y2
+        d = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
+        out[n] = float(np.std(f[loc] + np.clip(d, -0.5, 0.5) * df, ddof=1))
+    return out
