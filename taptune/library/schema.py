@@ -92,10 +92,19 @@ def _object(value, src: str, key: str, required: tuple[str, ...], optional: tupl
     return value
 
 
+def _is_finite(value) -> bool:
+    # JSON integers are unbounded: one with 400 digits overflows a float.
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def _number(value, src: str, key: str, lo: float | None = None, lo_open: bool = True) -> float:
     """A finite JSON number, optionally above ``lo`` (strictly when ``lo_open``)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        _fail(src, key, f"must be a finite number, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not _is_finite(value):
+        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+        _fail(src, key, f"must be a finite number, got {shown}")
     if lo is not None and (value <= lo if lo_open else value < lo):
         _fail(src, key, f"must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
     return float(value)
@@ -214,6 +223,8 @@ def check_tool_dict(value, src: str, key: str = "tool") -> dict:
 def check_params(value, src: str, key: str) -> HolderParams:
     """Validate the seven holder parameters (exactly the keys of :data:`NAMES`)."""
     _object(value, src, key, NAMES)
+    for k in NAMES:
+        _number(value[k], src, f"{key}.{k}")
     try:
         return HolderParams.from_dict(value, f"{src}: {key}")
     except InputError as err:

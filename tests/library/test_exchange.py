@@ -89,7 +89,7 @@ def test_an_invalid_import_changes_nothing_and_names_file_and_key(filled, tmp_pa
     before = filled.path.read_bytes()
     bad = tmp_path / "bad.json"
     bad.write_text(filled.path.read_text().replace('"k_rr": 15100.0', '"k_rr": "soft"', 1))
-    with pytest.raises(LibraryFormatError, match=rf"^{bad}: holder '.*': params: parameter k_rr must be a finite number"):
+    with pytest.raises(LibraryFormatError, match=rf"^{bad}: holder '.*': params.k_rr must be a finite number, got 'soft'$"):
         import_library(filled, bad)
     assert filled.path.read_bytes() == before
 

@@ -84,7 +84,9 @@ def mutate(path: tuple, value):
 @pytest.mark.parametrize(
     "change, key, problem",
     [
-        (mutate(("params", "k_tt"), "stiff"), "k_tt", "finite number"),
+        (mutate(("params", "k_tt"), "stiff"), "params.k_tt", "finite number"),
+        (mutate(("params", "k_tt"), 10**400), "params.k_tt", "finite number"),
+        (mutate(("holder", "clamp_length"), -(10**400)), "holder.clamp_length", "finite number"),
         (mutate(("params", "k_rr"), -1.0), "k_rr", "> 0"),
         (mutate(("params", "eta_rr"), KeyError), "params.eta_rr", "is missing"),
         (mutate(("params", "extra"), 1.0), "params.extra", "not a known key"),
