@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from taptune.io.assembly import Assembly, Segment
-from taptune.model.elements import BeamElements
+from taptune.model.elements import BeamElements, section_properties, shear_coefficient
 from taptune.model.options import ModelOptions
+from taptune.model.params import P_UPPER
 
 MM = 1e-3
 # Breakpoints closer than this are one (MODEL.md §2 rule 3: 1e-6 mm) [m].
@@ -119,6 +120,31 @@ def split_elements(z, parts: int) -> np.ndarray:
     return np.concatenate([inner, z[-1:]])
 
 
+def boundary_layer_length(assembly: Assembly, shear: str = "hutchinson") -> float:
+    """Shortest decay length of the contact boundary layer over the search space [m].
+
+    A layer of line stiffness c loads a beam over a length of about sqrt(κGA/c) (shear,
+    translational layer) or sqrt(EI/c) (bending, rotational layer). With the stiffest
+    layer of the search space (MODEL.md §8.1) this is a few mm for a Ø16 tool but well
+    under 1 mm for slender tools, so the first zone elements must follow it.
+    """
+    c_t = 10.0 ** P_UPPER[0] * 1e3  # N/m per m of contact
+    c_r = 10.0 ** P_UPPER[1] * 1e3  # N·m/rad per m of contact
+    zc0, L_h = assembly.z_contact_start, assembly.holder.length
+    lengths = []
+    for start, body in ((0.0, assembly.holder), (assembly.z_tool_start, assembly.tool)):
+        bounds = segment_bounds(start, body.segments)
+        for seg, a, b in zip(body.segments, bounds[:-1], bounds[1:]):
+            if min(b, L_h) - max(a, zc0) <= MERGE_TOL:
+                continue
+            area, inertia = section_properties([seg.od], [seg.id])
+            m = body.material
+            kappa = shear_coefficient([seg.od], [seg.id], m.poisson, shear)
+            g = m.youngs_modulus / (2 * (1 + m.poisson))
+            lengths += [np.sqrt(kappa * g * area / c_t)[0], np.sqrt(m.youngs_modulus * inertia / c_r)[0]]
+    return float(min(lengths))
+
+
 def _body(z, start, segments, material, shear) -> BeamElements:
     """Elements on nodes z, properties from the segment containing each mid-point (§2 rule 4)."""
     bounds = segment_bounds(start, segments)
@@ -157,9 +183,11 @@ def build_mesh(assembly: Assembly, options: ModelOptions = ModelOptions()) -> Me
     z_back, z_tip = assembly.z_tool_start, assembly.z_tip
     zone = (z_c0, L_h)
     coarsen = max(1.0, options.mesh_scale)
+    layer = boundary_layer_length(assembly, options.shear)
     h_out = options.h_max_mm * MM * coarsen
-    h_zone = options.zone_h_max_mm * MM * coarsen
-    h_min = options.zone_h_min_mm * MM * coarsen
+    h_zone = min(options.zone_h_max_mm * MM, options.layer_h_max_ratio * layer)
+    h_min = min(options.zone_h_min_mm * MM, options.layer_h_min_ratio * layer, h_zone)
+    h_zone, h_min = h_zone * coarsen, h_min * coarsen
 
     holder_geo = merge_points(np.concatenate([segment_bounds(0.0, holder.segments), [z_c0]]), (z_c0, L_h))
     tool_geo = merge_points(

@@ -177,7 +177,7 @@ def _omega2(freq_hz) -> np.ndarray:
     return (TWO_PI * f) ** 2
 
 
-def modal_receptance(lam, phi_i, phi_j, rigid_i, rigid_j, freq_hz, residual=0.0) -> np.ndarray:
+def modal_receptance(lam, phi_i, phi_j, rigid_i, rigid_j, freq_hz, residual=(0.0, 0.0), sigma=SIGMA) -> np.ndarray:
     """Receptance by modal superposition (MODEL.md §7.3) [m/N for w/f].
 
     Parameters
@@ -190,13 +190,16 @@ def modal_receptance(lam, phi_i, phi_j, rigid_i, rigid_j, freq_hz, residual=0.0)
         M-orthonormal rigid-body vectors at the same DOFs.
     freq_hz : array_like, shape (m,)
         Frequencies [Hz], > 0.
-    residual : complex
-        Frequency-independent contribution of the modes not included.
+    residual : tuple of complex
+        (R0, R1): contribution of the modes not included, to first order in ω² about σ:
+        R0 + (ω² − σ) R1.
+    sigma : float
+        Expansion point of the residual [rad²/s²].
     """
     w2 = _omega2(freq_hz)
     h = np.sum(rigid_i * rigid_j) / (-w2)
     h = h + (phi_i * phi_j)[None, :] @ (1.0 / (lam[:, None] - w2[None, :]))
-    return h.ravel() + residual
+    return h.ravel() + residual[0] + (w2 - sigma) * residual[1]
 
 
 def direct_receptance(K, M, i: int, j: int, freq_hz) -> np.ndarray:
@@ -223,7 +226,7 @@ def tip_receptance(fe: FEModel, params: HolderParams, freq_hz, method: str = "mo
         Frequencies [Hz], > 0.
     method : {"modal", "direct"}
         ``"modal"``: exact rigid-body terms, the ``n_modes`` lowest elastic modes and the
-        static residual of all other modes at σ (``n_modes=None``: every elastic mode, by
+        residual of all other modes at σ to first order in ω² (``n_modes=None``: every elastic mode, by
         a dense solve, no residual needed). ``"direct"``: one sparse LU per frequency.
     n_modes : int or None
         Elastic modes in the modal sum.
@@ -241,14 +244,19 @@ def tip_receptance(fe: FEModel, params: HolderParams, freq_hz, method: str = "mo
     eig, lam, vec, M = _elastic(fe, params, n_modes)
     rigid = rigid_body_modes(fe, M)[tip]
     phi = vec[tip]
-    residual = 0.0
+    residual = (0.0, 0.0)
     if n_modes is not None:
-        e = np.zeros(fe.n_dofs, dtype=complex)
-        e[tip] = 1.0
-        exact = eig.lu.solve(e)[tip]
-        retained = np.sum(rigid**2) / (-eig.sigma) + np.sum(phi**2 / (lam - eig.sigma))
-        residual = exact - retained
-    return modal_receptance(lam, phi, phi, rigid, rigid, freq_hz, residual)
+        # The omitted modes, to first order in ω² about σ. Solving with a load from which
+        # the rigid-body and retained modes are removed (unconjugated M-projection) gives
+        # x = Σ_omitted φ φ_tip / (λ − σ) directly, so R0 = x_tip and R1 = xᵀ M x, without
+        # the cancellation against the huge rigid-body terms at σ.
+        psi = rigid_body_modes(fe, M)
+        basis = np.concatenate([psi, vec], axis=1)
+        e = -(M @ basis) @ basis[tip]
+        e[tip] += 1.0
+        x = eig.lu.solve(e.astype(complex))
+        residual = (x[tip], x @ (M @ x))
+    return modal_receptance(lam, phi, phi, rigid, rigid, freq_hz, residual, eig.sigma)
 
 
 # --------------------------------------------------------------------------- diagnostics

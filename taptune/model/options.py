@@ -23,6 +23,11 @@ class ModelOptions:
     zone_h_min_mm : float
         Element length at both ends of the contact zone [mm]; the stiff contact layer
         loads the beams in a boundary layer a few mm long there.
+    layer_h_min_ratio, layer_h_max_ratio : float
+        The first and the largest zone element are also no longer than these multiples
+        of the shortest contact boundary layer over the search space (slender tools
+        under the stiffest admissible contact, see
+        :func:`taptune.model.mesh.boundary_layer_length`).
     zone_growth : float
         Ratio between neighbouring element lengths moving away from a zone end.
     zone_h_max_mm : float
@@ -40,6 +45,8 @@ class ModelOptions:
 
     h_max_mm: float = 2.0
     zone_h_min_mm: float = 0.25
+    layer_h_min_ratio: float = 0.2
+    layer_h_max_ratio: float = 2.0
     zone_growth: float = 1.3
     zone_h_max_mm: float = 1.5
     shear: str = "hutchinson"
@@ -47,7 +54,7 @@ class ModelOptions:
     mesh_scale: float = 1.0
 
     def __post_init__(self):
-        for name in ("h_max_mm", "zone_h_min_mm", "zone_h_max_mm", "mesh_scale"):
+        for name in ("h_max_mm", "zone_h_min_mm", "layer_h_min_ratio", "layer_h_max_ratio", "zone_h_max_mm", "mesh_scale"):
             value = getattr(self, name)
             if not value > 0:
                 raise ValueError(f"ModelOptions.{name} must be > 0, got {value!r}")

@@ -1,0 +1,137 @@
+"""Mesh rules and properties of the assembled free-free system (MODEL.md §2, §5, §6)."""
+
+import numpy as np
+import pytest
+
+from taptune.model.fe import build_model, rigid_contact_model
+from taptune.model.mesh import build_mesh
+from taptune.model.options import ModelOptions
+from taptune.model.params import HolderParams
+
+HOLDER_A = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.0)
+
+
+def test_mesh_has_nodes_at_every_breakpoint_and_coincident_contact_nodes(reference_assembly):
+    """§2: nodes at 0, segment boundaries, z_c0, the front face, the tool's back end and tip;
+    holder and tool nodes coincide in the contact zone."""
+    mesh = build_mesh(reference_assembly)
+    zh, zt = mesh.holder.z, mesh.tool.z
+    for z in (0.0, 0.032, 0.042, 0.060, 0.100):
+        assert np.min(np.abs(zh - z)) < 1e-12
+    for z in (0.060, 0.100, 0.1215, 0.1535):
+        assert np.min(np.abs(zt - z)) < 1e-12
+    hn, tn = mesh.contact_nodes.T
+    assert np.array_equal(zh[hn], zt[tn])
+    assert zh[hn][0] == pytest.approx(0.060) and zh[hn][-1] == pytest.approx(0.100)
+
+
+def test_mesh_is_graded_to_quarter_millimetre_elements_at_both_zone_ends(reference_assembly):
+    """§5.3: 0.25 mm at both ends of the contact zone, ≤ 1.5 mm inside it, ≤ 2 mm elsewhere."""
+    mesh = build_mesh(reference_assembly)
+    zh, l = mesh.holder.z, mesh.holder.length
+    mid = 0.5 * (zh[:-1] + zh[1:])
+    for end in (0.060, 0.100):
+        k = np.argmin(np.abs(mid - (end - 1e-4 if end == 0.1 else end + 1e-4)))
+        assert l[k] == pytest.approx(0.25e-3, rel=1e-6)
+    in_zone = (mid > 0.060) & (mid < 0.100)
+    assert l[in_zone].max() <= 1.5e-3 + 1e-12
+    assert l.max() <= 2e-3 + 1e-12 and mesh.tool.length.max() <= 2e-3 + 1e-12
+
+
+def test_mesh_scale_one_half_splits_every_element_in_two(reference_assembly):
+    base = build_mesh(reference_assembly)
+    half = build_mesh(reference_assembly, ModelOptions(mesh_scale=0.5))
+    assert np.allclose(half.holder.z[::2], base.holder.z) and np.allclose(half.tool.z[::2], base.tool.z)
+    assert len(half.contact_elements) == 2 * len(base.contact_elements)
+
+
+def test_element_properties_come_from_the_segment_at_the_element_midpoint(reference_assembly):
+    """§2 rule 4 and §1.2: flutes are a Ø12.8 cylinder (0.8 × Ø16) over the last 32 mm."""
+    mesh = build_mesh(reference_assembly)
+    t = mesh.tool
+    mid = 0.5 * (t.z[:-1] + t.z[1:])
+    assert np.all(t.od[mid > 0.1535 - 0.032] == pytest.approx(0.0128))
+    assert np.all(t.od[mid < 0.1535 - 0.032] == pytest.approx(0.016))
+    h = mesh.holder
+    hmid = 0.5 * (h.z[:-1] + h.z[1:])
+    assert np.all(h.od[(hmid > 0.032) & (hmid < 0.042)] == pytest.approx(0.063))
+    assert np.all(h.id[hmid > 0.042] == pytest.approx(0.016))
+
+
+def test_global_matrices_are_symmetric_and_strain_free_under_rigid_motion(reference_assembly):
+    """§6: K̃, M symmetric (K̃ complex symmetric, not Hermitian); K̃ t = 0, K̃ r = 0; tᵀMt = total mass."""
+    fe = build_model(reference_assembly)
+    K, M = fe.matrices(HOLDER_A)
+    assert abs(K - K.T).max() <= 1e-12 * abs(K).max()
+    assert abs(M - M.T).max() <= 1e-14 * abs(M).max()
+    t, r = fe.rigid_vectors
+    scale = abs(K).max()
+    assert np.abs(K @ t).max() < 1e-9 * scale and np.abs(K @ r).max() < 1e-9 * scale
+    # §13.4: total mass 1.54559 kg with holder A's density 7478 kg/m³ (holder 1.34393 kg at
+    # 7800 kg/m³ by hand, tool 0.2571 kg); the density factor scales only the holder.
+    assert t @ (M @ t) == pytest.approx(1.54559, rel=1e-5)
+    assert t @ (fe.M_holder @ t) == pytest.approx(1.34393, rel=1e-5)
+    assert t @ (fe.M_tool @ t) == pytest.approx(0.25713, rel=1e-4)
+
+
+def test_parameters_enter_affinely(reference_assembly):
+    """K = K_tool + m·K_holder + c_t(T0 + aT1) + c_r(R0 + aR1): doubling c_t adds c_t(T0 + aT1)."""
+    fe = build_model(reference_assembly)
+    p2 = HolderParams(**{**HOLDER_A.to_dict(), "k_tt": 2 * HOLDER_A.k_tt})
+    diff = fe.stiffness(p2) - fe.stiffness(HOLDER_A)
+    expected = HOLDER_A.c_t * (fe.T0 + HOLDER_A.alpha / 100 * fe.T1)
+    assert abs(diff - expected).max() <= 1e-9 * abs(expected).max()
+
+
+def test_contact_layer_totals_k_tt_times_contact_length_and_the_slope_averages_out(reference_assembly):
+    """§5.2: a unit relative translation strains the layer over L_c (uᵀT0u = 0.040 m, uᵀT1u = 0);
+    a relative rigid rotation about the zone middle gives ∫(z − z_m)² dz = L_c³/12 and a
+    unit relative rotation over L_c, with zero ξ-weighted parts by symmetry."""
+    fe = build_model(reference_assembly)
+    n_h = len(fe.z_holder)
+    u = np.zeros(fe.n_dofs)
+    u[2 * n_h::2] = 1.0  # tool translates, holder still
+    assert u @ (fe.T0 @ u) == pytest.approx(0.040, rel=1e-12)
+    assert abs(u @ (fe.T1 @ u)) < 1e-14
+    assert u @ (fe.R0 @ u) == pytest.approx(0.0, abs=1e-14)
+    # A rigid rotation of the tool about z = 0.08 (zone middle): relative w = z − 0.08, θ = 1.
+    w = np.zeros(fe.n_dofs)
+    w[2 * n_h::2] = fe.z_tool - 0.08
+    w[2 * n_h + 1::2] = 1.0
+    # ∫ (z − z_m)² dz over 40 mm = L³/12; ∫ ξ (z − z_m)² dz = 0 by symmetry.
+    assert w @ (fe.T0 @ w) == pytest.approx(0.040**3 / 12, rel=1e-9)
+    assert abs(w @ (fe.T1 @ w)) < 1e-14
+    assert w @ (fe.R0 @ w) == pytest.approx(0.040, rel=1e-12)
+    assert abs(w @ (fe.R1 @ w)) < 1e-14
+
+
+def test_dof_bookkeeping_and_tip_dof(reference_assembly):
+    """§0.2: holder nodes then tool nodes, [w, θ] per node, tip w = second-to-last DOF."""
+    fe = build_model(reference_assembly)
+    assert fe.n_dofs == 2 * (len(fe.z_holder) + len(fe.z_tool))
+    assert fe.tip_dof == fe.n_dofs - 2
+    assert fe.z_nodes[fe.tip_dof // 2] == pytest.approx(0.1535)
+    assert fe.n_elements == len(fe.z_holder) + len(fe.z_tool) - 2
+    assert fe.K_tool.dtype == complex and fe.T0.dtype == float
+    # Default mesh of the reference assembly: about 300 DOFs (§5.3).
+    assert 200 <= fe.n_dofs <= 400
+
+
+def test_rigid_contact_variant_ties_the_tool_to_the_holder_in_the_zone(reference_assembly):
+    """§7.6 / §13.4: tool DOFs in the zone become the holder's; still two rigid-body modes."""
+    fe = build_model(reference_assembly)
+    fr = rigid_contact_model(fe)
+    n_tied = len(fe.contact_nodes)
+    assert fr.n_dofs == fe.n_dofs - 2 * n_tied
+    K, M = fr.matrices(HOLDER_A)
+    t, r = fr.rigid_vectors
+    assert np.abs(K @ t).max() < 1e-9 * abs(K).max() and np.abs(K @ r).max() < 1e-9 * abs(K).max()
+    assert t @ (fr.mass(HOLDER_A) @ t) == pytest.approx(1.54559, rel=1e-5)
+    assert fr.z_nodes[fr.tip_dof // 2] == pytest.approx(0.1535)
+
+
+def test_options_round_trip_through_a_dict():
+    o = ModelOptions(h_max_mm=1.0, shear="cowper", mass="core", mesh_scale=0.5)
+    assert ModelOptions.from_dict(o.to_dict()) == o
+    with pytest.raises(ValueError):
+        ModelOptions(shear="euler")
