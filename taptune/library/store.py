@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import difflib
 import errno
+import glob
 import os
 import secrets
 import stat
@@ -89,7 +90,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    tmp = path.with_name(f"{_tmp_prefix(path)}{os.getpid()}.{secrets.token_hex(4)}.tmp")
     # os.open applies the umask to 0o666, as a plain open() of a new file would.
     os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:
@@ -106,6 +107,16 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None
         tmp.unlink(missing_ok=True)
         raise
     _fsync_dir(path.parent)
+
+
+def _tmp_prefix(path: Path) -> str:
+    return f".{path.name}."
+
+
+def _remove_stale_temporaries(path: Path) -> None:
+    """Delete temporary files a killed writer of ``path`` left behind (call under the lock)."""
+    for stale in path.parent.glob(f"{glob.escape(_tmp_prefix(path))}*.tmp"):
+        stale.unlink(missing_ok=True)
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
@@ -300,6 +311,9 @@ class HolderLibrary:
             if draft != current:
                 raw = encode(draft, str(self.path))
                 try:
+                    # Only library writers make these files, and they hold the lock while
+                    # they exist: any found now belong to a writer that was killed.
+                    _remove_stale_temporaries(self.target)
                     atomic_write_bytes(self.target, raw)
                 except OSError as err:
                     raise LibraryError(

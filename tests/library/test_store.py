@@ -237,10 +237,12 @@ def test_process_killed_mid_write_leaves_a_readable_old_library(lib):
     assert proc.returncode == -9, proc.stderr.decode()
     assert lib.path.read_bytes() == before
     assert list(lib.entries()) == ["A"]
-    # The lock died with the process: the next write goes through at once.
+    assert len(leftovers(lib.path.parent)) == 1  # the complete but orphaned new library
+    # The lock died with the process: the next write goes through at once and tidies up.
     fast = HolderLibrary(lib.path, lock_timeout=1.0)
     fast.put(make_entry("C"))
     assert list(fast.entries()) == ["A", "C"]
+    assert leftovers(lib.path.parent) == []
 
 
 @pytest.mark.parametrize(
