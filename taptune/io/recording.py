@@ -331,7 +331,7 @@ def find_input_device(device: int | str | None = None, devices: list[InputDevice
     if not devices:
         raise DeviceError("no audio input device found: connect a microphone (or headset) and try again")
     if device is None or device == "":
-        default = _default_input_index()
+        default = default_input_index()
         return next((d for d in devices if d.index == default), devices[0])
     if isinstance(device, int) or str(device).strip().isdigit():
         index = int(device)
@@ -349,7 +349,8 @@ def _names(devices: list[InputDevice]) -> str:
     return "; ".join(d.label() for d in devices)
 
 
-def _default_input_index() -> int:
+def default_input_index() -> int:
+    """PortAudio index of the default input device (-1 when there is none)."""
     try:
         default = _sounddevice().default.device[0]
     except DeviceError:

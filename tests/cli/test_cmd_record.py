@@ -14,7 +14,7 @@ from tests.io.test_recording import FS, synthetic_taps
 
 def _fake_device(monkeypatch, stream):
     monkeypatch.setattr(recording, "input_devices", lambda: [InputDevice(4, "Fake USB mic", 1, 48000.0)])
-    monkeypatch.setattr(recording, "_default_input_index", lambda: 4)
+    monkeypatch.setattr(recording, "default_input_index", lambda: 4)
     monkeypatch.setattr(recording, "sounddevice_stream", stream.factory)
 
 

@@ -1,0 +1,45 @@
+"""``taptune gui``: the desktop app; with ``--screenshot`` a PNG of its window (CLI-CONTRACT.md)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+VIEWS = ("record", "spectrum", "fit", "predict", "library")
+
+
+def _size(text: str) -> tuple[int, int]:
+    import argparse
+
+    m = re.fullmatch(r"\s*(\d{3,5})\s*[xX×]\s*(\d{3,5})\s*", text)
+    if not m:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, e.g. 1366x768, got {text!r}")
+    return int(m.group(1)), int(m.group(2))
+
+
+def add_parser(sub, name: str, help_text: str) -> None:
+    p = sub.add_parser(name, help=help_text, description=help_text + ".")
+    p.add_argument("wav", nargs="?", metavar="WAV", help="recording to open and analyse")
+    p.add_argument("--assembly", metavar="FILE", help="assembly file (default: the .toml beside the WAV)")
+    p.add_argument("--library", metavar="PATH", help="holder library file")
+    p.add_argument("--screenshot", metavar="PNG", help="save a picture of the window to PNG and exit")
+    p.add_argument("--size", type=_size, default=(1366, 768), metavar="WxH",
+                   help="window size in pixels (default 1366x768)")
+    p.add_argument("--view", choices=VIEWS, help="with --screenshot: the tab to show")
+    p.add_argument("--identify", action="store_true", help="with --screenshot: identify the holder first")
+
+
+def run(args) -> int:
+    from taptune.errors import InputError
+
+    if args.wav and not Path(args.wav).is_file():
+        raise InputError(f"{args.wav}: no such file")
+    if args.assembly:
+        from taptune.io.assembly import load_assembly
+
+        load_assembly(args.assembly)  # a bad file is a one-line error before any window opens
+    if (args.view or args.identify) and not args.screenshot:
+        raise InputError("--view and --identify only apply with --screenshot")
+    from taptune.gui.app import run as run_app
+
+    return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify)

@@ -1,0 +1,118 @@
+"""Start the desktop app, or render its window to a PNG (``--screenshot``) and exit.
+
+Qt and matplotlib are imported here and below only: ``taptune --help`` never loads them.
+Where there is no display, Qt's offscreen platform renders the same window a user sees.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+SCREENSHOT_TIMEOUT_S = 300
+
+
+def _ensure_platform() -> None:
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+
+def application():
+    """The QApplication (created once)."""
+    _ensure_platform()
+    from PySide6.QtWidgets import QApplication
+
+    app = QApplication.instance()
+    if app is None:
+        app = QApplication([sys.argv[0] if sys.argv else "taptune"])
+        app.setApplicationName("taptune")
+        app.setOrganizationName("taptune")
+    return app
+
+
+def wait_for(signal, timeout_s: float):
+    """Run the event loop until ``signal`` fires (or the timeout); returns its arguments or None."""
+    from PySide6.QtCore import QEventLoop, QTimer
+
+    loop = QEventLoop()
+    received = []
+
+    def got(*args):
+        received.append(args)
+        loop.quit()
+
+    signal.connect(got)
+    QTimer.singleShot(int(timeout_s * 1000), loop.quit)
+    loop.exec()
+    signal.disconnect(got)
+    return received[0] if received else None
+
+
+def settle(window, predictor_timeout_s: float = 30.0) -> None:
+    """Let pending background updates and repaints finish before a picture is taken."""
+    from PySide6.QtCore import QEventLoop, QTimer
+
+    if window.predictor.busy:
+        wait_for(window.predictor.predicted, predictor_timeout_s)
+    for _ in range(3):
+        loop = QEventLoop()
+        QTimer.singleShot(50, loop.quit)
+        loop.exec()
+
+
+def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
+        identify: bool = False) -> int:
+    """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
+
+    Returns the exit status: 0, or 2 when the recording could not be analysed in
+    screenshot mode (the picture shows the message), 1 when identification failed.
+    """
+    app = application()
+    from taptune.gui.main_window import MainWindow
+    from taptune.library import default_library_path
+
+    window = MainWindow(default_library_path(library))
+    window.resize(*size)
+    if assembly:
+        window.assembly_panel.load_file(assembly)
+    window.show()
+    status = 0
+    if wav:
+        window.load_recording(str(wav), assembly)
+        if screenshot:
+            outcome = _wait_analysis(window)
+            if outcome != "ok":
+                print(f"taptune gui: {outcome}", file=sys.stderr)
+                status = 2
+            elif identify:
+                window.start_identification()
+                ended = wait_for(window.identification_ended, SCREENSHOT_TIMEOUT_S)
+                if not ended or ended[0] != "finished":
+                    print("taptune gui: identification did not finish", file=sys.stderr)
+                    status = 1
+    if not screenshot:
+        return app.exec()
+    if view:
+        window.show_view(view)
+    settle(window)
+    pixmap = window.grab()
+    if not pixmap.save(str(screenshot), "PNG"):
+        print(f"taptune gui: cannot write {screenshot}", file=sys.stderr)
+        status = 1
+    window.close()
+    return status
+
+
+def _wait_analysis(window) -> str:
+    """'ok' once the recording is analysed, else the failure message."""
+    from PySide6.QtCore import QEventLoop, QTimer
+
+    if window.analysis is not None and not window.busy:
+        return "ok"
+    loop = QEventLoop()
+    outcome = []
+    window.analysis_ready.connect(lambda _a: (outcome.append("ok"), loop.quit()))
+    window.load_failed.connect(lambda m: (outcome.append(m), loop.quit()))
+    QTimer.singleShot(SCREENSHOT_TIMEOUT_S * 1000, loop.quit)
+    loop.exec()
+    return outcome[0] if outcome else "analysis timed out"

@@ -1,0 +1,419 @@
+"""Assembly panel: pick holder and tool (assets, holder library, files), edit dimensions, see them to scale.
+
+The panel keeps the holder and tool as the tables of an assembly file (mm, GPa) and
+turns them into a validated :class:`~taptune.io.assembly.Assembly` with
+:func:`~taptune.io.assembly.parse_assembly` after every edit: the GUI checks geometry
+with exactly the rules the CLI uses. An invalid edit shows the message and keeps the
+last valid assembly.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QTableWidget,
+    QTableWidgetItem,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+)
+
+from taptune.gui.assembly_drawing import AssemblyDrawing
+
+MM = 1e-3
+INTERFACES = ("HSK-A63", "HSK-A100", "HSK-E40", "SK40", "BT40", "CAT40", "unknown")
+
+
+def assets_dir() -> Path:
+    """The ``assets/`` folder of holder and tool geometries shipped with taptune."""
+    return Path(__file__).resolve().parents[2] / "assets"
+
+
+def read_asset_tables(folder: Path) -> tuple[list[tuple[str, dict]], list[tuple[str, dict]]]:
+    """Holder and tool tables of every TOML file under ``folder``: ([(label, table)], [(label, table)]).
+
+    A file may hold a ``[holder]``, a ``[tool]`` or both (a whole assembly); files that
+    are not valid TOML are skipped (they are reported when opened directly).
+    """
+    holders, tools = [], []
+    if not folder.is_dir():
+        return holders, tools
+    for path in sorted(folder.rglob("*.toml")):
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            continue
+        if isinstance(data.get("holder"), dict) and "name" in data["holder"]:
+            holders.append((f"{data['holder']['name']}  [{path.stem}]", data["holder"]))
+        if isinstance(data.get("tool"), dict):
+            tools.append((f"{data['tool'].get('name', path.stem)}  [{path.stem}]", data["tool"]))
+    return holders, tools
+
+
+def tool_table(tool) -> dict:
+    """An io Tool as an assembly-file ``[tool]`` table (shank/flute keys where the tool has them)."""
+    from taptune.library.schema import tool_to_dict
+
+    table = tool_to_dict(tool)
+    if tool.shank_diameter is not None:
+        table.pop("segments")
+    return table
+
+
+def _spin(lo: float, hi: float, decimals: int = 2, suffix: str = " mm") -> QDoubleSpinBox:
+    box = QDoubleSpinBox()
+    box.setRange(lo, hi)
+    box.setDecimals(decimals)
+    box.setSuffix(suffix)
+    box.setKeyboardTracking(False)  # validate the number once it is typed, not every keystroke
+    return box
+
+
+class SegmentsTable(QTableWidget):
+    """Editable list of cylinders: length, outer and inner diameter [mm]."""
+
+    edited = Signal()
+
+    def __init__(self, parent=None):
+        super().__init__(0, 3, parent)
+        self.setHorizontalHeaderLabels(["length mm", "OD mm", "ID mm"])
+        self.horizontalHeader().setSectionResizeMode(QHeaderView.Stretch)
+        self.verticalHeader().setDefaultSectionSize(22)
+        self.setMinimumHeight(90)
+        self.itemChanged.connect(lambda _item: self.edited.emit())
+
+    def set_segments(self, segments: list[dict]) -> None:
+        self.blockSignals(True)
+        self.setRowCount(len(segments))
+        for r, s in enumerate(segments):
+            for c, key in enumerate(("length", "od", "id")):
+                self.setItem(r, c, QTableWidgetItem(f"{float(s.get(key, 0.0)):g}"))
+        self.blockSignals(False)
+
+    def segments(self) -> list[dict]:
+        """The rows as segment tables; a cell that is not a number is passed on as text (parse reports it)."""
+        out = []
+        for r in range(self.rowCount()):
+            row = {}
+            for c, key in enumerate(("length", "od", "id")):
+                item = self.item(r, c)
+                text = item.text().strip() if item is not None else ""
+                try:
+                    row[key] = float(text) if text else 0.0
+                except ValueError:
+                    row[key] = text
+            out.append(row)
+        return out
+
+    def add_row(self) -> None:
+        last = self.segments()[-1] if self.rowCount() else {"length": 10.0, "od": 40.0, "id": 0.0}
+        self.set_segments(self.segments() + [dict(last)])
+        self.edited.emit()
+
+    def remove_row(self) -> None:
+        if self.rowCount() > 1:
+            row = self.currentRow() if self.currentRow() >= 0 else self.rowCount() - 1
+            rows = self.segments()
+            del rows[row]
+            self.set_segments(rows)
+            self.edited.emit()
+
+
+class AssemblyPanel(QWidget):
+    """Holder, tool and stick-out of the assembly under test.
+
+    Signals
+    -------
+    assembly_changed(object)
+        The new valid :class:`~taptune.io.assembly.Assembly` (None while invalid).
+    """
+
+    assembly_changed = Signal(object)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self._holder: dict | None = None
+        self._tool: dict | None = None
+        self._assembly = None
+        self._filling = False
+        self.library_holders: dict[str, dict] = {}
+        self.drawing = AssemblyDrawing()
+
+        self.holder_combo = QComboBox()
+        self.tool_combo = QComboBox()
+        for combo in (self.holder_combo, self.tool_combo):
+            combo.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(18)
+        self.stickout = _spin(1.0, 500.0, 1)
+        self.stickout.setToolTip("Length of tool outside the holder front face")
+        pick = QFormLayout()
+        pick.addRow("Holder", self.holder_combo)
+        pick.addRow("Tool", self.tool_combo)
+        pick.addRow("Stick-out", self.stickout)
+
+        # Holder dimensions.
+        self.holder_name = QLineEdit()
+        self.interface = QComboBox()
+        self.interface.setEditable(True)
+        self.interface.addItems(INTERFACES)
+        self.clamp = _spin(0.1, 500.0, 1)
+        self.segments = SegmentsTable()
+        add, remove = QPushButton("Add segment"), QPushButton("Remove")
+        add.clicked.connect(self.segments.add_row)
+        remove.clicked.connect(self.segments.remove_row)
+        holder_tab = QWidget()
+        hf = QFormLayout(holder_tab)
+        hf.addRow("Name", self.holder_name)
+        hf.addRow("Interface", self.interface)
+        hf.addRow("Clamp length", self.clamp)
+        hf.addRow(QLabel("Segments from the spindle end to the front face:"))
+        hf.addRow(self.segments)
+        buttons = QHBoxLayout()
+        buttons.addWidget(add)
+        buttons.addWidget(remove)
+        buttons.addStretch(1)
+        hf.addRow(buttons)
+
+        # Tool dimensions.
+        self.tool_name = QLineEdit()
+        self.total_length = _spin(1.0, 1000.0, 2)
+        self.shank = _spin(0.1, 200.0, 2)
+        self.flute_length = _spin(0.1, 1000.0, 2)
+        self.flute_diameter = _spin(0.1, 200.0, 2)
+        self.flute_ratio = _spin(0.05, 1.5, 2, "")
+        self.flute_ratio.setToolTip("The fluted part is modelled as a cylinder of ratio × flute diameter")
+        self.stepped_note = QLabel()
+        self.stepped_note.setWordWrap(True)
+        tool_tab = QWidget()
+        tf = QFormLayout(tool_tab)
+        tf.addRow("Name", self.tool_name)
+        tf.addRow("Total length", self.total_length)
+        tf.addRow("Shank Ø", self.shank)
+        tf.addRow("Flute length", self.flute_length)
+        tf.addRow("Flute Ø", self.flute_diameter)
+        tf.addRow("Flute ratio", self.flute_ratio)
+        tf.addRow(self.stepped_note)
+
+        self.tabs = QTabWidget()
+        self.tabs.addTab(holder_tab, "Holder dimensions")
+        self.tabs.addTab(tool_tab, "Tool dimensions")
+
+        self.open_button = QPushButton("Open assembly…")
+        self.save_button = QPushButton("Save assembly…")
+        self.open_button.clicked.connect(self._open_dialog)
+        self.save_button.clicked.connect(self._save_dialog)
+        files = QHBoxLayout()
+        files.addWidget(self.open_button)
+        files.addWidget(self.save_button)
+
+        self.message = QLabel()
+        self.message.setWordWrap(True)
+        self.message.setTextInteractionFlags(Qt.TextSelectableByMouse)
+
+        box = QGroupBox("Assembly")
+        layout = QVBoxLayout(box)
+        layout.addWidget(self.drawing, 2)
+        layout.addLayout(pick)
+        layout.addWidget(self.tabs, 3)
+        layout.addLayout(files)
+        layout.addWidget(self.message)
+        outer = QVBoxLayout(self)
+        outer.setContentsMargins(0, 0, 0, 0)
+        outer.addWidget(box)
+
+        for widget in (self.stickout, self.clamp, self.total_length, self.shank, self.flute_length,
+                       self.flute_diameter, self.flute_ratio):
+            widget.valueChanged.connect(self._edited)
+        self.holder_name.editingFinished.connect(self._edited)
+        self.tool_name.editingFinished.connect(self._edited)
+        self.interface.currentTextChanged.connect(self._edited)
+        self.segments.edited.connect(self._edited)
+        self.holder_combo.activated.connect(self._holder_picked)
+        self.tool_combo.activated.connect(self._tool_picked)
+        self.reload_choices()
+
+    # ------------------------------------------------------------------ choices
+
+    @property
+    def assembly(self):
+        """The current valid assembly, or None."""
+        return self._assembly
+
+    def reload_choices(self, library_entries: dict | None = None) -> None:
+        """Refill the holder and tool lists from ``assets/`` and the library entries given."""
+        if library_entries is not None:
+            self.library_holders = {name: entry.holder for name, entry in library_entries.items()}
+        holders, tools = read_asset_tables(assets_dir())
+        self._holder_choices = [("", None)] + [(f"library: {n}", h) for n, h in self.library_holders.items()] + holders
+        self._tool_choices = [("", None)] + tools
+        for combo, choices, what in ((self.holder_combo, self._holder_choices, "holder"),
+                                     (self.tool_combo, self._tool_choices, "tool")):
+            combo.blockSignals(True)
+            combo.clear()
+            combo.addItem(f"choose a {what}…" if len(choices) > 1 else f"no {what} in assets or library")
+            for label, _ in choices[1:]:
+                combo.addItem(label)
+            combo.blockSignals(False)
+
+    def _holder_picked(self, index: int) -> None:
+        table = self._holder_choices[index][1] if 0 <= index < len(self._holder_choices) else None
+        if table is not None:
+            self._holder = copy.deepcopy(table)
+            self._fill_holder()
+            self._edited()
+
+    def _tool_picked(self, index: int) -> None:
+        table = self._tool_choices[index][1] if 0 <= index < len(self._tool_choices) else None
+        if table is not None:
+            self._tool = copy.deepcopy(table)
+            self._fill_tool()
+            self._edited()
+
+    # ------------------------------------------------------------------ loading
+
+    def load_file(self, path) -> None:
+        """Load an assembly file (raises InputError with the file's problem; nothing changes then)."""
+        from taptune.io.assembly import load_assembly
+
+        self.set_assembly(load_assembly(path))
+
+    def set_assembly(self, assembly) -> None:
+        """Show ``assembly`` in the form and make it current."""
+        from taptune.io.assembly import holder_to_dict
+
+        self._holder = holder_to_dict(assembly.holder)
+        self._tool = tool_table(assembly.tool)
+        self._filling = True
+        try:
+            self.stickout.setValue(assembly.stickout / MM)
+        finally:
+            self._filling = False
+        self._fill_holder()
+        self._fill_tool()
+        self._edited()
+
+    def set_holder_table(self, table: dict) -> None:
+        """Use the holder geometry ``table`` (mm; e.g. a library entry's) with the current tool."""
+        self._holder = copy.deepcopy(table)
+        self._fill_holder()
+        self._edited()
+
+    def set_stickout_mm(self, value: float) -> None:
+        self.stickout.setValue(value)
+
+    def _fill_holder(self) -> None:
+        h = self._holder
+        self._filling = True
+        try:
+            self.holder_name.setText(str(h.get("name", "")))
+            self.interface.setCurrentText(str(h.get("interface", "unknown")))
+            self.clamp.setValue(float(h.get("clamp_length", 0.0)))
+            self.segments.set_segments(list(h.get("segments", [])))
+        finally:
+            self._filling = False
+
+    def _fill_tool(self) -> None:
+        t = self._tool
+        stepped = "segments" in t
+        self._filling = True
+        try:
+            self.tool_name.setText(str(t.get("name", "")))
+            self.total_length.setValue(float(t.get("total_length", 0.0)))
+            for box, key, default in ((self.shank, "shank_diameter", 0.0), (self.flute_length, "flute_length", 0.0),
+                                      (self.flute_diameter, "flute_diameter", 0.0), (self.flute_ratio, "flute_ratio", 0.8)):
+                box.setValue(float(t.get(key, default)))
+                box.setEnabled(not stepped)
+            self.total_length.setEnabled(not stepped)
+            self.stepped_note.setText(
+                f"Stepped tool of {len(t['segments'])} segments from its file: edit the file to change them."
+                if stepped else ""
+            )
+        finally:
+            self._filling = False
+
+    # ------------------------------------------------------------------ editing
+
+    def _edited(self, *_args) -> None:
+        if self._filling:
+            return
+        if self._holder is None or self._tool is None:
+            missing = "a holder" if self._holder is None else "a tool"
+            self._show(None, f"Choose {missing}, or open an assembly file.")
+            return
+        self._holder.update(
+            name=self.holder_name.text().strip(),
+            interface=self.interface.currentText().strip() or "unknown",
+            clamp_length=self.clamp.value(),
+            segments=self.segments.segments(),
+        )
+        self._tool["name"] = self.tool_name.text().strip() or "tool"
+        if "segments" not in self._tool:
+            self._tool.update(
+                total_length=self.total_length.value(),
+                shank_diameter=self.shank.value(),
+                flute_length=self.flute_length.value(),
+                flute_diameter=self.flute_diameter.value(),
+                flute_ratio=self.flute_ratio.value(),
+            )
+        from taptune.errors import InputError
+        from taptune.io.assembly import parse_assembly
+
+        data = {"holder": self._holder, "tool": self._tool, "setup": {"stickout": self.stickout.value()}}
+        try:
+            assembly = parse_assembly(data, "assembly")
+        except InputError as err:
+            # Keep the last valid assembly for the drawing's context; tell what is wrong.
+            self._show(None, str(err))
+            return
+        self._show(assembly, "\n".join(assembly.warnings))
+
+    def _show(self, assembly, message: str) -> None:
+        self._assembly = assembly
+        self.drawing.set_assembly(assembly, message)
+        self.message.setText(message)
+        self.message.setStyleSheet("color: #b00020;" if assembly is None else "color: #8a6d00;")
+        self.assembly_changed.emit(assembly)
+
+    # ------------------------------------------------------------------ files
+
+    def assembly_toml(self) -> str | None:
+        """The current assembly as assembly-file text (None while invalid)."""
+        from taptune.io.assembly import assembly_to_toml
+
+        return assembly_to_toml(self._assembly) if self._assembly is not None else None
+
+    def _open_dialog(self) -> None:
+        from taptune.errors import InputError
+        from taptune.gui.messages import show_error
+
+        path, _ = QFileDialog.getOpenFileName(self, "Open assembly", str(assets_dir()), "Assembly files (*.toml)")
+        if path:
+            try:
+                self.load_file(path)
+            except InputError as err:
+                show_error(self, "Cannot open the assembly", str(err))
+
+    def _save_dialog(self) -> None:
+        from taptune.gui.messages import save_text, show_error
+
+        text = self.assembly_toml()
+        if text is None:
+            show_error(self, "Nothing to save", "The assembly is not valid yet: " + self.message.text())
+            return
+        path, _ = QFileDialog.getSaveFileName(self, "Save assembly", "assembly.toml", "Assembly files (*.toml)")
+        if path:
+            save_text(self, path, text)

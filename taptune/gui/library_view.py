@@ -1,0 +1,242 @@
+"""Library view: list, inspect, export, import and remove holders — the same calls as ``taptune library``."""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (
+    QAbstractItemView,
+    QFileDialog,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QMessageBox,
+    QPushButton,
+    QTableWidget,
+    QTableWidgetItem,
+    QTextBrowser,
+    QVBoxLayout,
+    QWidget,
+)
+
+from taptune.gui.fit_view import PARAM_ROWS
+from taptune.gui.layout import hsplit
+from taptune.gui.messages import show_error, show_info
+
+COLUMNS = ("holder", "interface", "identifications", "last identified")
+
+
+def entry_html(entry) -> str:
+    """A readable description of a library entry: geometry, parameters with spread, history."""
+    e = html.escape
+    h = entry.holder
+    spread = entry.spread()
+    rows = "".join(
+        f"<tr><td>{e(label)}</td><td align=right>{fmt.format(getattr(entry.params, key))}</td>"
+        f"<td align=right>± {fmt.format(spread[key])}</td><td>{e(unit)}</td></tr>"
+        for key, label, unit, fmt in PARAM_ROWS
+    )
+    segments = ", ".join(f"{s['length']:g}×Ø{s['od']:g}/{s['id']:g}" for s in h.get("segments", []))
+    history = "".join(
+        f"<li>{e(r.date)}: {e(r.recording)}, {e(r.tool_name)} at {r.stickout_mm:g} mm, "
+        f"f = {', '.join(f'{f:,.0f}' for f in r.bending_measured_hz)} Hz, objective {r.objective:.3g}</li>"
+        for r in entry.identifications
+    )
+    return (
+        f"<h3>{e(entry.name)}</h3>"
+        f"<p>Interface {e(entry.interface)}; clamp length {h.get('clamp_length', 0):g} mm; "
+        f"segments (length×Ø outer/inner, mm): {e(segments)}</p>"
+        f"<p><b>Parameters</b> ({len(entry.param_sets)} near-optimal sets)</p>"
+        f"<table cellspacing=4>{rows}</table>"
+        f"<p><b>Identifications</b></p><ul>{history or '<li>none recorded</li>'}</ul>"
+    )
+
+
+class LibraryView(QWidget):
+    """The holder library file and its holders.
+
+    Signals
+    -------
+    changed(dict)
+        The entries after any change (also after opening another library).
+    use_for_prediction(object)
+        The chosen :class:`~taptune.library.HolderEntry`.
+    """
+
+    changed = Signal(dict)
+    use_for_prediction = Signal(object)
+
+    def __init__(self, library_path, parent=None):
+        super().__init__(parent)
+        self.path_label = QLabel()
+        self.path_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        self.path_label.setWordWrap(True)
+        self.table = QTableWidget(0, len(COLUMNS))
+        self.table.setHorizontalHeaderLabels([c.capitalize() for c in COLUMNS])
+        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeToContents)
+        self.table.horizontalHeader().setSectionResizeMode(0, QHeaderView.Stretch)
+        self.table.verticalHeader().setVisible(False)
+        self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
+        self.table.setSelectionMode(QAbstractItemView.SingleSelection)
+        self.table.setEditTriggers(QAbstractItemView.NoEditTriggers)
+        self.table.itemSelectionChanged.connect(self._selected)
+        self.details = QTextBrowser()
+        self.details.setOpenLinks(False)
+
+        self.buttons = {}
+        row = QHBoxLayout()
+        for key, text, slot in (
+            ("predict", "Use for prediction", self._use),
+            ("import", "Import…", self._import_dialog),
+            ("export", "Export…", self._export_dialog),
+            ("remove", "Remove…", self._remove_dialog),
+            ("open", "Open other library…", self._open_dialog),
+        ):
+            button = QPushButton(text)
+            button.clicked.connect(slot)
+            self.buttons[key] = button
+            row.addWidget(button)
+        row.addStretch(1)
+
+        split = hsplit(self.table, self.details)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.path_label)
+        layout.addLayout(row)
+        layout.addWidget(split, 1)
+        self.entries: dict = {}
+        self.set_library(library_path)
+
+    # ------------------------------------------------------------------ state
+
+    @property
+    def library(self):
+        from taptune.library import HolderLibrary
+
+        return HolderLibrary(self.library_path)
+
+    def set_library(self, path) -> None:
+        self.library_path = Path(path)
+        self.path_label.setText(f"Holder library: {self.library_path}")
+        self.refresh()
+
+    def refresh(self) -> None:
+        """Re-read the library file (a broken file is reported, never overwritten)."""
+        from taptune.errors import TaptuneError
+
+        try:
+            self.entries = self.library.entries()
+        except TaptuneError as err:
+            self.entries = {}
+            self.details.setHtml(f"<p style='color:#b00020'>{html.escape(str(err))}</p>")
+            show_error(self, "Cannot read the holder library", str(err))
+        self.table.setRowCount(len(self.entries))
+        for r, entry in enumerate(self.entries.values()):
+            values = (entry.name, entry.interface, str(len(entry.identifications)),
+                      (entry.last_identified or "–").replace("T", " ").rstrip("Z"))
+            for c, text in enumerate(values):
+                self.table.setItem(r, c, QTableWidgetItem(text))
+        if not self.entries:
+            self.details.setHtml("<p>The library is empty: identify a holder and save it, or import a library file.</p>")
+        elif self.table.currentRow() < 0:
+            self.table.selectRow(0)
+        self._update_buttons()
+        self.changed.emit(self.entries)
+
+    def selected(self):
+        """The selected entry, or None."""
+        row = self.table.currentRow()
+        names = list(self.entries)
+        return self.entries[names[row]] if 0 <= row < len(names) else None
+
+    def select(self, name: str) -> None:
+        names = list(self.entries)
+        if name in names:
+            self.table.selectRow(names.index(name))
+
+    def _selected(self) -> None:
+        entry = self.selected()
+        if entry is not None:
+            self.details.setHtml(entry_html(entry))
+        self._update_buttons()
+
+    def _update_buttons(self) -> None:
+        has = self.selected() is not None
+        for key in ("predict", "remove"):
+            self.buttons[key].setEnabled(has)
+        self.buttons["export"].setEnabled(bool(self.entries))
+
+    # ------------------------------------------------------------------ actions
+
+    def _use(self) -> None:
+        entry = self.selected()
+        if entry is not None:
+            self.use_for_prediction.emit(entry)
+
+    def export_to(self, path, format: str | None = None) -> int | None:
+        """Export the library (JSON or CSV from the suffix); a dialog reports the outcome."""
+        from taptune.errors import TaptuneError
+
+        format = format or ("csv" if str(path).lower().endswith(".csv") else "json")
+        try:
+            count = self.library.export(path, format=format)
+        except TaptuneError as err:
+            show_error(self, "Export failed", str(err))
+            return None
+        show_info(self, "Library exported", f"{count} holder(s) written to {path}")
+        return count
+
+    def import_from(self, path, replace: bool = False):
+        """Validate and merge a library file; a dialog shows what happened."""
+        from taptune.errors import TaptuneError
+
+        try:
+            report = self.library.import_file(path, replace=replace)
+        except TaptuneError as err:
+            show_error(self, "Import failed", str(err))
+            return None
+        self.refresh()
+        show_info(self, "Library imported", "\n".join(report.lines()))
+        return report
+
+    def remove(self, name: str) -> bool:
+        """Remove the holder ``name`` from the library file."""
+        from taptune.errors import TaptuneError
+
+        try:
+            self.library.remove(name)
+        except TaptuneError as err:
+            show_error(self, "Cannot remove", str(err))
+            return False
+        self.refresh()
+        return True
+
+    def _export_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Export library", "holders.json", "JSON (*.json);;CSV (*.csv)")
+        if path:
+            self.export_to(path)
+
+    def _import_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Import holders", "", "Holder library (*.json)")
+        if path:
+            self.import_from(path)
+
+    def _remove_dialog(self) -> None:
+        entry = self.selected()
+        if entry is None:
+            return
+        box = QMessageBox(QMessageBox.Question, "Remove holder",
+                          f"Remove {entry.name!r} and its {len(entry.identifications)} identification(s) "
+                          "from the library?", QMessageBox.Yes | QMessageBox.Cancel, self)
+        box.setDefaultButton(QMessageBox.Cancel)
+        box.setAttribute(Qt.WA_DeleteOnClose)
+        box.finished.connect(lambda result, name=entry.name: result == QMessageBox.Yes and self.remove(name))
+        box.open()
+
+    def _open_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Open or create a holder library", str(self.library_path),
+                                              "Holder library (*.json)", options=QFileDialog.DontConfirmOverwrite)
+        if path:
+            self.set_library(path)

@@ -1,0 +1,449 @@
+"""The main window: assembly on the left; record, spectrum, fit, predict and library on the right.
+
+The window holds the session (recording, analysis, identification) and wires the views
+to the same functions the CLI calls: ``read_audio`` → ``analyse_for_assembly`` →
+``identify`` → ``save to library`` → ``predict``. Long calls run in worker threads
+(:mod:`taptune.gui.workers`); every failure is shown as a message and leaves the
+recording, the assembly and the library as they were.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtWidgets import (
+    QFileDialog,
+    QHBoxLayout,
+    QLabel,
+    QMainWindow,
+    QProgressBar,
+    QPushButton,
+    QScrollArea,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+)
+
+from taptune.gui.assembly_panel import AssemblyPanel
+from taptune.gui.fit_view import FitView
+from taptune.gui.library_view import LibraryView
+from taptune.gui.messages import show_error
+from taptune.gui.predictor import Predictor, PredictorSource
+from taptune.gui.recorder_panel import RecorderPanel
+from taptune.gui.spectrum_view import SpectrumView, relabel
+from taptune.gui.workers import TaskRunner
+
+AUDIO_SUFFIXES = (".wav", ".flac")
+VIEWS = ("record", "spectrum", "fit", "predict", "library")
+
+
+def analyse_file(path: str, assembly):
+    """Read a recording and analyse it, guided by ``assembly`` when there is one (worker thread).
+
+    Returns ``(recording, analysis, expected_hz)``; ``expected_hz`` is the model's guess
+    of f1–f3 with nominal parameters (None without an assembly).
+    """
+    from taptune.identify.pipeline import analyse_for_assembly, model_expectation
+    from taptune.io.audio import read_audio
+
+    recording = read_audio(path)
+    analysis = analyse_for_assembly(recording, assembly)
+    expected = model_expectation(assembly)[0] if assembly is not None else None
+    return recording, analysis, expected
+
+
+def run_identification(analysis, assembly, options, progress=None):
+    """One-recording identification (worker thread); ``progress`` may cancel it."""
+    from taptune.identify import identify
+
+    return identify([analysis], [assembly], options, progress=progress)
+
+
+class MainWindow(QMainWindow):
+    """taptune's desktop window.
+
+    Parameters
+    ----------
+    library_path : path
+        The holder library file.
+    identify_options : IdentifyOptions, optional
+        Default: seed 0, one process (forking a process with Qt threads running is not
+        safe), the standard optimiser budget.
+    stream_factory, devices : optional
+        Passed to the recording panel (tests use a fake input stream).
+    """
+
+    analysis_ready = Signal(object)
+    identification_ready = Signal(object)
+    identification_ended = Signal(str)  # "finished", "failed" or "cancelled"
+    saved_to_library = Signal(str)
+    load_failed = Signal(str)
+
+    def __init__(self, library_path, identify_options=None, stream_factory=None, devices=None, parent=None):
+        super().__init__(parent)
+        from taptune import __version__
+
+        self.setWindowTitle(f"taptune {__version__} — tool-holder dynamics from a tap")
+        self.setAcceptDrops(True)
+        if identify_options is None:
+            from taptune.identify import IdentifyOptions
+
+            identify_options = IdentifyOptions(seed=0, jobs=1)
+        self.identify_options = identify_options
+        self.runner = TaskRunner(self)
+        self.recording = None
+        self.recording_path: str | None = None
+        self.analysis = None
+        self.expected_hz = None
+        self.identification = None
+        self.identified = None  # (recording, assembly) the identification was made from
+        self._loading = None
+        self._identify_task = None
+
+        self.assembly_panel = AssemblyPanel()
+        self.recorder = RecorderPanel(self._assembly_for_recording, stream_factory=stream_factory, devices=devices)
+        self.spectrum = SpectrumView()
+        self.fit = FitView()
+        self.predictor = Predictor()
+        self.library_view = LibraryView(library_path)
+
+        record_tab = QWidget()
+        rl = QVBoxLayout(record_tab)
+        rl.addWidget(self.recorder)
+        open_box = QLabel("…or open a recording made earlier: <b>Open recording…</b> above, "
+                          "or drop a WAV/FLAC file onto the window. An assembly file with the "
+                          "same name beside it is loaded too.")
+        open_box.setWordWrap(True)
+        rl.addWidget(open_box)
+        rl.addStretch(1)
+
+        self.tabs = QTabWidget()
+        self.tabs.addTab(record_tab, "1  Record")
+        self.tabs.addTab(self.spectrum, "2  Spectrum")
+        self.tabs.addTab(self.fit, "3  Fit")
+        self.tabs.addTab(self.predictor, "4  Predict")
+        self.tabs.addTab(self.library_view, "Library")
+
+        # The workflow bar: always visible, in the order of the job.
+        self.open_button = QPushButton("Open recording…")
+        self.identify_button = QPushButton("Identify holder")
+        self.cancel_button = QPushButton("Cancel")
+        self.save_button = QPushButton("Save to library")
+        self.progress = QProgressBar()
+        self.progress.setRange(0, 1000)
+        self.progress.setTextVisible(True)
+        self.progress.setFormat("")
+        self.file_label = QLabel("No recording")
+        self.file_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        self.open_button.clicked.connect(self._open_dialog)
+        self.identify_button.clicked.connect(self.start_identification)
+        self.cancel_button.clicked.connect(self.cancel_identification)
+        self.save_button.clicked.connect(self.save_to_library)
+        bar = QHBoxLayout()
+        bar.addWidget(self.open_button)
+        bar.addWidget(self.file_label, 1)
+        bar.addWidget(self.identify_button)
+        bar.addWidget(self.progress, 1)
+        bar.addWidget(self.cancel_button)
+        bar.addWidget(self.save_button)
+
+        right = QWidget()
+        rv = QVBoxLayout(right)
+        rv.setContentsMargins(0, 0, 0, 0)
+        rv.addLayout(bar)
+        rv.addWidget(self.tabs, 1)
+        scroll = QScrollArea()
+        scroll.setWidget(self.assembly_panel)
+        scroll.setWidgetResizable(True)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
+        scroll.setMinimumWidth(340)
+        self.splitter = QSplitter(Qt.Horizontal)
+        self.splitter.addWidget(scroll)
+        self.splitter.addWidget(right)
+        self.splitter.setStretchFactor(0, 0)
+        self.splitter.setStretchFactor(1, 1)
+        self.splitter.setChildrenCollapsible(False)
+        self.setCentralWidget(self.splitter)
+
+        self._reanalyse = QTimer(self)
+        self._reanalyse.setSingleShot(True)
+        self._reanalyse.setInterval(600)
+        self._reanalyse.timeout.connect(self._reanalyse_now)
+        self.assembly_panel.assembly_changed.connect(self._assembly_changed)
+        self.recorder.recorded.connect(self.load_recording)
+        self.recorder.status.connect(self.statusBar().showMessage)
+        self.spectrum.relabel_requested.connect(self.relabel_peak)
+        self.library_view.changed.connect(self.assembly_panel.reload_choices)
+        self.library_view.use_for_prediction.connect(self.use_library_entry)
+        self.predictor.failed.connect(lambda m: self.statusBar().showMessage(f"Prediction: {m}", 8000))
+        self.assembly_panel.reload_choices(self.library_view.entries)
+        self._update_actions()
+        self.statusBar().showMessage("Choose the holder and tool, then record or open a recording.")
+
+    # ------------------------------------------------------------------ helpers
+
+    def show_view(self, name: str) -> None:
+        """Bring one of :data:`VIEWS` to the front."""
+        self.tabs.setCurrentIndex(VIEWS.index(name))
+
+    @property
+    def busy(self) -> bool:
+        """True while a recording is analysed or a holder identified."""
+        return self._loading is not None or self._identify_task is not None
+
+    def _assembly_for_recording(self):
+        return self.assembly_panel.assembly, self.assembly_panel.assembly_toml()
+
+    def _update_actions(self) -> None:
+        identifying = self._identify_task is not None
+        self.identify_button.setEnabled(self.analysis is not None and self.assembly_panel.assembly is not None
+                                        and not self.busy)
+        self.identify_button.setToolTip("" if self.assembly_panel.assembly is not None
+                                        else "Describe the assembly first (left)")
+        self.cancel_button.setEnabled(identifying)
+        self.save_button.setEnabled(self.identification is not None and not identifying)
+        self.open_button.setEnabled(not identifying)
+
+    # ------------------------------------------------------------------ recordings
+
+    def _open_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open recording", str(Path.cwd() / "recordings"),
+                                              "Recordings (*.wav *.flac *.WAV *.FLAC)")
+        if path:
+            self.load_recording(path)
+
+    def load_recording(self, path: str, assembly_path: str | None = None) -> None:
+        """Read and analyse a recording in the background.
+
+        The assembly comes from ``assembly_path``, else from an assembly file with the
+        same name beside the recording, else from the panel as it is.
+        """
+        from taptune.errors import InputError
+
+        if self._identify_task is not None:
+            show_error(self, "Busy", "Wait for the identification to end (or cancel it) before opening a recording.")
+            return
+        sidecar = Path(path).with_suffix(".toml")
+        toml_path = assembly_path or (str(sidecar) if sidecar.is_file() else None)
+        if toml_path:
+            try:
+                self.assembly_panel.load_file(toml_path)
+            except InputError as err:
+                show_error(self, "Cannot use the assembly file", f"{err}\nThe assembly on the left is used instead.")
+        self._reanalyse.stop()
+        self._analyse(str(path))
+
+    def _analyse(self, path: str) -> None:
+        assembly = self.assembly_panel.assembly
+        self.file_label.setText(Path(path).name)
+        self.statusBar().showMessage(f"Analysing {path}…")
+        self._set_progress(None, "analysing the recording")
+        self._loading = self.runner.start(
+            analyse_file, path, assembly, with_progress=False,
+            on_finished=lambda result: self._analysed(path, assembly, result),
+            on_failed=lambda message: self._analysis_failed(path, message),
+        )
+        self._update_actions()
+
+    def _analysed(self, path: str, assembly, result) -> None:
+        self._loading = None
+        recording, analysis, expected = result
+        self.recording, self.recording_path, self.analysis, self.expected_hz = recording, path, analysis, expected
+        self._set_progress(0, "")
+        title = f"{Path(path).name}" + (f" — {assembly.holder.name}, stick-out {assembly.stickout * 1e3:g} mm"
+                                        if assembly is not None else " — no assembly: bending labels are a guess")
+        self.spectrum.show_analysis(analysis, title, expected)
+        self.show_view("spectrum")
+        self.statusBar().showMessage(f"Analysed {path}: {analysis.n_taps} taps used.")
+        self._update_actions()
+        self.analysis_ready.emit(analysis)
+
+    def _analysis_failed(self, path: str, message: str) -> None:
+        self._loading = None
+        self._set_progress(0, "")
+        self.statusBar().showMessage(f"Could not analyse {path}", 10000)
+        show_error(self, "Cannot analyse the recording", message)
+        self._update_actions()
+        self.load_failed.emit(message)
+
+    def relabel_peak(self, index: int, kind: str, mode) -> None:
+        """Give peak ``index`` a new label (from a click in the spectrum)."""
+        if self.analysis is None or self._identify_task is not None:
+            return
+        self.analysis = relabel(self.analysis, index, kind, mode)
+        title = self.spectrum.canvas.figure.axes[0].get_title(loc="left") if self.spectrum.canvas.figure.axes else ""
+        self.spectrum.show_analysis(self.analysis, title, self.expected_hz)
+        self.statusBar().showMessage("Peak relabelled; identify again to use the new labels.", 8000)
+
+    def _assembly_changed(self, assembly) -> None:
+        # The model's guess guides the peak labels: analyse again once the edits settle.
+        if self.recording_path is not None and assembly is not None:
+            self._reanalyse.start()
+        self._retarget_predictor(assembly)
+        self._update_actions()
+
+    def _reanalyse_now(self) -> None:
+        if self.recording_path is None or self.assembly_panel.assembly is None:
+            return
+        if self.busy:
+            self._reanalyse.start()  # try again when the running job has ended
+        else:
+            self._analyse(self.recording_path)
+
+    # ------------------------------------------------------------------ identification
+
+    def start_identification(self) -> None:
+        """Fit the holder to the analysed recording in a worker thread (Cancel stops it)."""
+        assembly = self.assembly_panel.assembly
+        if self.analysis is None or assembly is None or self.busy:
+            return
+        self._set_progress(0, "starting")
+        self.statusBar().showMessage("Identifying the holder… the window stays usable; Cancel stops it.")
+        recording = self.recording
+        self._identify_task = self.runner.start(
+            run_identification, self.analysis, assembly, self.identify_options,
+            on_finished=lambda result: self._identified(result, recording, assembly),
+            on_failed=self._identification_failed,
+            on_progress=self._set_progress,
+            on_cancelled=self._identification_cancelled,
+        )
+        self._update_actions()
+
+    def cancel_identification(self) -> None:
+        if self._identify_task is not None:
+            self._identify_task.cancel()
+            self._set_progress(None, "cancelling")
+
+    def _set_progress(self, fraction, message: str) -> None:
+        if fraction is None:
+            self.progress.setRange(0, 0)  # busy indicator
+        else:
+            self.progress.setRange(0, 1000)
+            self.progress.setValue(int(round(1000 * max(0.0, min(1.0, fraction)))))
+        self.progress.setFormat(message)
+
+    def _identified(self, result, recording, assembly) -> None:
+        self._identify_task = None
+        self.identification = result
+        self.identified = (recording, assembly)
+        self._set_progress(1.0, "done")
+        self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model")
+        self.predictor.set_source(PredictorSource(f"identified now ({assembly.holder.name})",
+                                                  tuple(result.param_sets), assembly, self.identify_options.model))
+        self.show_view("fit")
+        self.statusBar().showMessage(
+            f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
+        self._update_actions()
+        self.identification_ready.emit(result)
+        self.identification_ended.emit("finished")
+
+    def _identification_failed(self, message: str) -> None:
+        self._identify_task = None
+        self._set_progress(0, "failed")
+        show_error(self, "Identification failed", message)
+        self._update_actions()
+        self.identification_ended.emit("failed")
+
+    def _identification_cancelled(self) -> None:
+        self._identify_task = None
+        self._set_progress(0, "cancelled")
+        self.statusBar().showMessage("Identification cancelled.", 8000)
+        self._update_actions()
+        self.identification_ended.emit("cancelled")
+
+    # ------------------------------------------------------------------ library and prediction
+
+    def save_to_library(self) -> str | None:
+        """Store the identified holder in the library file; returns its name."""
+        from taptune.errors import TaptuneError
+        from taptune.library import HolderLibrary
+        from taptune.library.record import entry_from_identification
+
+        if self.identification is None:
+            return None
+        recording, assembly = self.identified
+        try:
+            entry = entry_from_identification(self.identification, [recording], [assembly],
+                                              self.identify_options.model)
+            HolderLibrary(self.library_view.library_path).put(entry)
+        except (TaptuneError, OSError) as err:
+            show_error(self, "Cannot save to the library", f"{err}\nThe identification is kept; try again.")
+            return None
+        self.library_view.refresh()
+        self.library_view.select(entry.name)
+        self.statusBar().showMessage(f"Saved {entry.name!r} to {self.library_view.library_path}.")
+        self.saved_to_library.emit(entry.name)
+        return entry.name
+
+    def use_library_entry(self, entry) -> None:
+        """Predict with a library holder and the tool and stick-out of the panel."""
+        from taptune.errors import InputError
+        from taptune.model import ModelOptions
+
+        assembly = self.assembly_panel.assembly
+        if assembly is None:
+            show_error(self, "No tool", "Describe the tool and stick-out on the left first.")
+            return
+        try:
+            assembly = assembly.with_holder(entry.holder_geometry())
+            options = ModelOptions.from_dict(entry.model_options) if entry.model_options else None
+        except (InputError, TypeError, ValueError) as err:
+            show_error(self, "Cannot use this holder with this tool", str(err))
+            return
+        sets = tuple(entry.param_sets) or (entry.params,)
+        if sets[0] != entry.params:
+            sets = (entry.params,) + sets
+        self.predictor.set_source(PredictorSource(f"library ({entry.name})", sets, assembly, options))
+        self.show_view("predict")
+
+    def _retarget_predictor(self, assembly) -> None:
+        """The predictor follows the panel's tool; its holder stays the one its parameters belong to."""
+        from taptune.errors import InputError
+
+        source = self.predictor.source
+        if source is None or assembly is None or assembly == source.assembly:
+            return
+        try:
+            moved = assembly.with_holder(source.assembly.holder)
+        except InputError as err:
+            self.statusBar().showMessage(f"Prediction keeps the previous tool: {err}", 10000)
+            return
+        self.predictor.set_source(PredictorSource(source.label, source.param_sets, moved, source.model_options))
+
+    # ------------------------------------------------------------------ drag and drop, closing
+
+    def dragEnterEvent(self, event) -> None:
+        if self._dropped_paths(event):
+            event.acceptProposedAction()
+
+    def dropEvent(self, event) -> None:
+        paths = self._dropped_paths(event)
+        audio = [p for p in paths if p.lower().endswith(AUDIO_SUFFIXES)]
+        toml = [p for p in paths if p.lower().endswith(".toml")]
+        event.acceptProposedAction()
+        if audio:
+            self.load_recording(audio[0], toml[0] if toml else None)
+        elif toml:
+            from taptune.errors import InputError
+
+            try:
+                self.assembly_panel.load_file(toml[0])
+            except InputError as err:
+                show_error(self, "Cannot open the assembly", str(err))
+
+    @staticmethod
+    def _dropped_paths(event) -> list[str]:
+        mime = event.mimeData()
+        if not mime.hasUrls():
+            return []
+        return [u.toLocalFile() for u in mime.urls()
+                if u.isLocalFile() and u.toLocalFile().lower().endswith(AUDIO_SUFFIXES + (".toml",))]
+
+    def closeEvent(self, event) -> None:
+        # Stop the workers before Qt tears the window down; recordings are on disk already.
+        self.recorder.shutdown()
+        self.predictor.shutdown()
+        self.runner.shutdown()
+        super().closeEvent(event)

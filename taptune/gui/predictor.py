@@ -1,0 +1,209 @@
+"""Stick-out predictor: move the stick-out, see f1–f3 with their spread and the tip receptance.
+
+The holder's near-optimal parameter sets (from the identification just run or from the
+library) go to :func:`taptune.identify.predict` with the assembly at the chosen
+stick-out; the tip receptance of the best set comes from the model. Each update runs in
+a worker thread; while one runs, only the latest request waits, so dragging the slider
+never queues up work or blocks the window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QTableWidgetItem, QVBoxLayout, QWidget
+
+from taptune.gui.layout import column, hsplit, read_only_table
+from taptune.gui.plotting import BENDING, MEASURED, PlotCanvas
+from taptune.gui.workers import TaskRunner
+
+MM = 1e-3
+# Receptance plot grid [Hz]: up to 25 kHz covers f1–f3 of usual assemblies.
+FREQ_HZ = np.linspace(20.0, 25000.0, 2500)
+SLIDER_STEPS_PER_MM = 10
+
+
+@dataclass(frozen=True)
+class PredictorSource:
+    """Where the holder parameters come from and the assembly they are used with."""
+
+    label: str
+    param_sets: tuple
+    assembly: object
+    model_options: object = None
+
+
+def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ_HZ):
+    """Prediction and best-set tip receptance [m/N] at ``stickout_mm`` (runs in a worker)."""
+    from taptune.identify import predict
+    from taptune.model import ModelOptions, build_model, tip_receptance
+
+    options = source.model_options or ModelOptions()
+    assembly = source.assembly.with_stickout(stickout_mm * MM)
+    prediction = predict(source.param_sets, assembly, options)
+    h = tip_receptance(build_model(assembly, options), source.param_sets[0], freq_hz)
+    return stickout_mm, prediction, np.asarray(h)
+
+
+def stickout_range_mm(assembly) -> tuple[float, float]:
+    """Stick-outs the slider offers [mm]: from the holder's depth to 5 mm of grip left."""
+    total = assembly.tool.total_length / MM
+    lo = max(1.0, total - assembly.holder.length / MM + 0.1)
+    hi = max(lo + 1.0, total - 5.0)
+    return float(np.ceil(lo)), float(np.floor(hi))
+
+
+class Predictor(QWidget):
+    """Predicted bending frequencies and tip receptance at any stick-out.
+
+    Signals
+    -------
+    predicted(object)
+        The :class:`~taptune.identify.Prediction` just shown.
+    """
+
+    predicted = Signal(object)
+    failed = Signal(str)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.source: PredictorSource | None = None
+        self.prediction = None
+        self._runner = TaskRunner(self)
+        self._running = False
+        self._pending: float | None = None
+
+        self.source_label = QLabel()
+        self.source_label.setWordWrap(True)
+        self.slider = QSlider(Qt.Horizontal)
+        self.spin = QDoubleSpinBox()
+        self.spin.setDecimals(1)
+        self.spin.setSuffix(" mm")
+        self.spin.setSingleStep(0.5)
+        self.spin.setKeyboardTracking(False)
+        self.slider.valueChanged.connect(lambda v: self.spin.setValue(v / SLIDER_STEPS_PER_MM))
+        self.spin.valueChanged.connect(self._spin_changed)
+        row = QHBoxLayout()
+        row.addWidget(QLabel("Stick-out"))
+        row.addWidget(self.slider, 1)
+        row.addWidget(self.spin)
+
+        self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ %"])
+        self.table.setMaximumHeight(4 * 24 + 6)
+        self.note = QLabel(
+            "The spread is the half-width of the band that holds the predictions of every "
+            "near-optimal fit: the tap cannot tell those fits apart."
+        )
+        self.note.setWordWrap(True)
+        self.note.setStyleSheet("color: #555555;")
+        self.canvas = PlotCanvas(self)
+        split = hsplit(column(self.table, self.note, 1), self.canvas, (2, 3))
+
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.source_label)
+        layout.addLayout(row)
+        layout.addWidget(split, 1)
+        self.set_source(None)
+
+    def set_source(self, source: PredictorSource | None) -> None:
+        """Use ``source`` (None: nothing to predict yet) and predict at its stick-out."""
+        self.source = source
+        enabled = source is not None
+        self.slider.setEnabled(enabled)
+        self.spin.setEnabled(enabled)
+        if source is None:
+            self.source_label.setText("Identify a holder, or pick one in the Library tab, to predict other stick-outs.")
+            self.canvas.message("No holder parameters yet.")
+            self.table.clearContents()
+            return
+        self.source_label.setText(f"Holder parameters: {source.label}. Tool: {source.assembly.tool.name}.")
+        lo, hi = stickout_range_mm(source.assembly)
+        current = source.assembly.stickout / MM
+        for w in (self.slider, self.spin):
+            w.blockSignals(True)
+        self.slider.setRange(int(lo * SLIDER_STEPS_PER_MM), int(hi * SLIDER_STEPS_PER_MM))
+        self.spin.setRange(lo, hi)
+        self.spin.setValue(current)
+        self.slider.setValue(int(round(current * SLIDER_STEPS_PER_MM)))
+        for w in (self.slider, self.spin):
+            w.blockSignals(False)
+        self.request(current)
+
+    def set_stickout_mm(self, value: float) -> None:
+        """Move the stick-out (as the user would with the field)."""
+        self.spin.setValue(value)
+
+    def _spin_changed(self, value: float) -> None:
+        self.slider.blockSignals(True)
+        self.slider.setValue(int(round(value * SLIDER_STEPS_PER_MM)))
+        self.slider.blockSignals(False)
+        self.request(value)
+
+    def request(self, stickout_mm: float) -> None:
+        """Predict at ``stickout_mm``; while a prediction runs, keep only the latest request."""
+        if self.source is None:
+            return
+        if self._running:
+            self._pending = stickout_mm
+            return
+        self._running = True
+        self._runner.start(compute_prediction, self.source, stickout_mm, with_progress=False,
+                           on_finished=self._done, on_failed=self._failed)
+
+    @property
+    def busy(self) -> bool:
+        return self._running or self._pending is not None
+
+    def _next(self) -> None:
+        self._running = False
+        if self._pending is not None:
+            value, self._pending = self._pending, None
+            self.request(value)
+
+    def _failed(self, message: str) -> None:
+        self.canvas.message(f"Cannot predict here:\n{message}")
+        self.table.clearContents()
+        self.failed.emit(message)
+        self._next()
+
+    def _done(self, result) -> None:
+        stickout_mm, prediction, h = result
+        if self._pending is None:
+            self._show(stickout_mm, prediction, h)
+        self._next()
+
+    def _show(self, stickout_mm: float, prediction, h) -> None:
+        self.prediction = prediction
+        for r in range(3):
+            f = prediction.bending_hz[r]
+            s = prediction.bending_hz_spread[r]
+            z = prediction.damping_ratio[r]
+            zs = prediction.damping_ratio_spread[r]
+            for c, text in enumerate((f"f{r + 1}", f"{f:,.0f} ± {s:,.0f}", f"{100 * z:.3f} ± {100 * zs:.3f}")):
+                item = QTableWidgetItem(text)
+                item.setTextAlignment(Qt.AlignCenter if c == 0 else Qt.AlignRight | Qt.AlignVCenter)
+                self.table.setItem(r, c, item)
+        fig = self.canvas.figure
+        fig.clear()
+        with self.canvas.styled():
+            ax = fig.add_subplot(111)
+            ax.semilogy(FREQ_HZ / 1e3, np.abs(h), color=MEASURED, lw=1.2, label="tip receptance |H|, best fit")
+            for n, (f, s) in enumerate(zip(prediction.bending_hz, prediction.bending_hz_spread)):
+                ax.axvspan((f - s) / 1e3, (f + s) / 1e3, color=BENDING, alpha=0.25, lw=0)
+                ax.axvline(f / 1e3, color=BENDING, lw=0.8, ls=":")
+                ax.annotate(f"f{n + 1}", (f / 1e3, 1.0), xycoords=("data", "axes fraction"), xytext=(3, -12),
+                            textcoords="offset points", color=BENDING, fontsize=9, fontweight="bold")
+            ax.set_xlim(0, FREQ_HZ[-1] / 1e3)
+            ax.set_xlabel("frequency [kHz]")
+            ax.set_ylabel("|H| [m/N]")
+            ax.set_title(f"Free-free tip receptance at stick-out {stickout_mm:.1f} mm", loc="left")
+            ax.legend(loc="upper right", framealpha=0.9)
+        self.canvas.draw_idle()
+        self.predicted.emit(prediction)
+
+    def shutdown(self) -> None:
+        self._pending = None
+        self._runner.shutdown()

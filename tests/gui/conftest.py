@@ -1,0 +1,93 @@
+"""Fixtures for the GUI tests: a generated tap recording with its assembly, a temporary library.
+
+The recording is made from the model itself: the first three bending modes of the
+reference assembly with holder A's parameters (MODEL.md §13.4) ring down after each
+tap, on a low noise floor, as a microphone would hear a tool-tip tap.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+# Holder A of MODEL.md §13.4 (published identified values).
+HOLDER_A = dict(k_tt=1.90e9, k_rr=9.37e3, eta_tt=1.98e-3, eta_rr=8.20e-3, alpha=-10.0,
+                density_factor=7478 / 7800, modulus_factor=1.0)
+FS = 48000
+
+
+def tap_sound(frequencies_hz, damping, amplitudes, onsets_s, seconds, fs=FS, noise=2e-4, seed=1):
+    """Decaying sines (one per mode) starting at each onset, on white noise; shape (n,)."""
+    rng = np.random.default_rng(seed)
+    x = noise * rng.standard_normal(int(seconds * fs))
+    t = np.arange(int(0.5 * fs)) / fs
+    ring = np.zeros_like(t)
+    for f, z, a in zip(frequencies_hz, damping, amplitudes):
+        w = 2 * np.pi * f
+        ring += a * np.exp(-z * w * t) * np.sin(w * np.sqrt(1 - z * z) * t)
+    for k, t0 in enumerate(onsets_s):
+        i = int(t0 * fs)
+        n = min(ring.size, x.size - i)
+        x[i:i + n] += (0.8 + 0.1 * k % 3) * ring[:n]
+    return 0.5 * x / np.max(np.abs(x))
+
+
+@pytest.fixture(scope="session")
+def generated_recording(tmp_path_factory):
+    """A 5-tap WAV of the reference assembly (holder A) and its sidecar assembly file."""
+    import soundfile
+
+    from taptune.io.assembly import load_assembly
+    from taptune.model import build_model, solve_modes
+    from taptune.model.params import HolderParams
+    from tests.conftest import REFERENCE_TOML
+
+    folder = tmp_path_factory.mktemp("recordings")
+    toml = folder / "er32_d16_53.5mm.toml"
+    toml.write_text(REFERENCE_TOML)
+    assembly = load_assembly(toml)
+    modes = solve_modes(build_model(assembly), HolderParams(**HOLDER_A), n_modes=3)
+    x = tap_sound(modes.frequency_hz[:3], modes.damping_ratio[:3], (1.0, 0.5, 0.35),
+                  onsets_s=(0.3, 1.0, 1.7, 2.4, 3.1), seconds=3.8)
+    wav = folder / "er32_d16_53.5mm.wav"
+    soundfile.write(wav, x, FS, subtype="PCM_24")
+    return wav, toml, tuple(float(f) for f in modes.frequency_hz[:3])
+
+
+@pytest.fixture
+def library_path(tmp_path, monkeypatch):
+    """An empty temporary holder library (and TAPTUNE_LIBRARY pointing at it)."""
+    path = tmp_path / "library" / "holders.json"
+    monkeypatch.setenv("TAPTUNE_LIBRARY", str(path))
+    return path
+
+
+@pytest.fixture
+def fast_identify_options():
+    """A small optimiser budget: the GUI path is tested, not the optimiser's accuracy."""
+    from taptune.identify import GAOptions, IdentifyOptions
+
+    return IdentifyOptions(seed=0, jobs=1, islands=1, ga=GAOptions(population=24, generations=10, patience=5),
+                           polish_evaluations=60)
+
+
+@pytest.fixture(autouse=True)
+def _clear_messages():
+    from taptune.gui import messages
+
+    messages.history.clear()
+    yield
+    messages.history.clear()
+
+
+@pytest.fixture
+def window(qtbot, library_path, fast_identify_options):
+    """The real main window at laptop size, with no audio device."""
+    from taptune.gui.main_window import MainWindow
+
+    win = MainWindow(library_path, identify_options=fast_identify_options, devices=lambda: [])
+    qtbot.addWidget(win)
+    win.resize(1366, 768)
+    win.show()
+    yield win
+    win.close()

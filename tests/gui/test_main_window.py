@@ -1,0 +1,150 @@
+"""The real main window, driven as a user would: open a recording, identify, save, predict.
+
+Offscreen Qt (tests/conftest.py); the recording is generated from the model (conftest).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from PySide6.QtCore import QMimeData, QPointF, Qt, QTimer, QUrl
+from PySide6.QtGui import QDropEvent
+
+from taptune.gui import messages
+
+
+def _load(qtbot, window, wav, timeout=30000):
+    with qtbot.waitSignal(window.analysis_ready, timeout=timeout):
+        window.load_recording(str(wav))
+
+
+def test_open_identify_save_and_predict(qtbot, window, generated_recording, library_path):
+    wav, toml, true_hz = generated_recording
+    _load(qtbot, window, wav)
+    # The assembly file beside the recording was loaded into the panel.
+    assert window.assembly_panel.assembly.holder.name == "ER32 collet chuck HSK-A63 x 100"
+    assert window.tabs.currentWidget() is window.spectrum
+    bending = window.analysis.bending_hz
+    np.testing.assert_allclose(bending, true_hz, rtol=1e-3)
+    assert window.identify_button.isEnabled()
+
+    # Identification runs in a worker: a 10 ms timer on the GUI thread keeps ticking.
+    ticks = []
+    timer = QTimer()
+    timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
+    timer.start(10)
+    progress = []
+    window.progress.valueChanged.connect(progress.append)
+    with qtbot.waitSignal(window.identification_ended, timeout=120000) as blocker:
+        window.start_identification()
+        assert not window.identify_button.isEnabled() and window.cancel_button.isEnabled()
+    timer.stop()
+    assert blocker.args == ["finished"], messages.history
+    result = window.identification
+    gaps = np.diff(ticks)
+    assert len(ticks) >= 5 and gaps.max() < 0.5, f"event loop stalled for {gaps.max():.2f} s"
+    assert progress and max(progress) == 1000
+    assert window.tabs.currentWidget() is window.fit
+    assert window.fit.freq_table.item(0, 1).text() == f"{bending[0]:,.1f}"
+    assert abs(result.bending_model_hz[0][0] / bending[0] - 1) < 0.02
+
+    # Save to the temporary library: the library view lists it.
+    assert window.save_button.isEnabled()
+    assert window.save_to_library() == "ER32 collet chuck HSK-A63 x 100"
+    assert library_path.is_file()
+    assert window.library_view.table.rowCount() == 1
+    assert window.library_view.entries["ER32 collet chuck HSK-A63 x 100"].identifications
+
+    # The predictor starts at the recorded stick-out; 10 mm longer lowers f1.
+    if window.predictor.prediction is None or window.predictor.busy:
+        qtbot.waitSignal(window.predictor.predicted, timeout=20000).wait()
+    f1_recorded = window.predictor.prediction.bending_hz[0]
+    text_before = window.predictor.table.item(0, 1).text()
+    window.show_view("predict")
+    with qtbot.waitSignal(window.predictor.predicted, timeout=20000) as blocker:
+        window.predictor.set_stickout_mm(63.5)
+    assert blocker.args[0].stickout_mm == pytest.approx(63.5)
+    assert blocker.args[0].bending_hz[0] < 0.9 * f1_recorded
+    assert window.predictor.table.item(0, 1).text() != text_before
+    assert window.predictor.slider.value() == 635
+    assert messages.history == []
+
+
+def test_cancel_stops_identification_and_keeps_the_analysis(qtbot, window, generated_recording):
+    from taptune.identify import IdentifyOptions
+
+    _load(qtbot, window, generated_recording[0])
+    window.identify_options = IdentifyOptions(seed=0, jobs=1)  # the full budget: cancel must cut it short
+    window.progress.valueChanged.connect(lambda _v: window.cancel_identification())
+    t0 = time.perf_counter()
+    with qtbot.waitSignal(window.identification_ended, timeout=60000) as blocker:
+        window.start_identification()
+    assert blocker.args == ["cancelled"]
+    assert time.perf_counter() - t0 < 20
+    assert window.identification is None and window.analysis is not None
+    assert window.identify_button.isEnabled() and not window.cancel_button.isEnabled()
+    assert window.progress.format() == "cancelled"
+
+
+def test_a_broken_recording_shows_a_message_and_keeps_the_session(qtbot, window, generated_recording, tmp_path):
+    wav = generated_recording[0]
+    _load(qtbot, window, wav)
+    analysis, assembly = window.analysis, window.assembly_panel.assembly
+    broken = tmp_path / "broken.wav"
+    broken.write_bytes(b"RIFF\x00\x00\x00\x00WAVEfmt garbage")
+    with qtbot.waitSignal(window.load_failed, timeout=30000):
+        window.load_recording(str(broken))
+    assert messages.history and messages.history[-1][0] == "Cannot analyse the recording"
+    assert "broken.wav" in messages.history[-1][1]
+    assert window.analysis is analysis and window.assembly_panel.assembly == assembly
+    assert window.identify_button.isEnabled()
+
+
+def test_click_on_a_peak_relabels_it(qtbot, window, generated_recording):
+    from matplotlib.backend_bases import MouseEvent
+
+    _load(qtbot, window, generated_recording[0])
+    view = window.spectrum
+    view.canvas.draw()
+    f1 = next(i for i, p in enumerate(window.analysis.peaks) if p.kind == "bending" and p.mode == 1)
+    x, y = view._ax.transData.transform(view._peak_xy[f1])
+    MouseEvent("button_press_event", view.canvas, x, y, button=1)._process()
+    menu = view._menu
+    assert menu.isVisible()
+    other = next(a for a in menu.actions() if a.text().startswith("Other"))
+    other.trigger()
+    peaks = window.analysis.peaks
+    assert peaks[f1].kind == "other" and peaks[f1].note == "labelled by the user"
+    assert 1 not in window.analysis.bending_by_mode()
+    # And back: make it bending mode 1 again.
+    window.relabel_peak(f1, "bending", 1)
+    assert window.analysis.bending_by_mode()[1] == pytest.approx(peaks[f1].hz)
+
+
+def test_dropping_a_wav_opens_it(qtbot, window, generated_recording):
+    wav = generated_recording[0]
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(wav))])
+    event = QDropEvent(QPointF(500, 300), Qt.CopyAction, mime, Qt.LeftButton, Qt.NoModifier)
+    with qtbot.waitSignal(window.analysis_ready, timeout=30000):
+        window.dropEvent(event)
+    assert window.file_label.text() == wav.name
+
+
+def test_library_holder_predicts_with_the_panel_tool(qtbot, window, library_path, reference_assembly):
+    from taptune.library import HolderEntry, HolderLibrary
+    from taptune.model.params import HolderParams
+
+    from tests.gui.conftest import HOLDER_A
+
+    HolderLibrary(library_path).put(HolderEntry.create(reference_assembly.holder, HolderParams(**HOLDER_A)))
+    window.library_view.refresh()
+    window.assembly_panel.set_assembly(reference_assembly)
+    assert window.library_view.table.rowCount() == 1
+    with qtbot.waitSignal(window.predictor.predicted, timeout=20000) as blocker:
+        window.library_view.buttons["predict"].click()
+    # MODEL.md §13.4: holder A at 53.5 mm, f1 = 4685.8 Hz.
+    assert blocker.args[0].bending_hz[0] == pytest.approx(4685.8, rel=5e-4)
+    assert window.tabs.currentWidget() is window.predictor
