@@ -53,7 +53,12 @@ def main(argv: list[str] | None = None) -> int:
     command = next((a for a in argv if not a.startswith("-")), None)
     if command not in COMMANDS:
         command = None
-    parser = _build_parser(command)
+    try:
+        parser = _build_parser(command)
+    except ImportError as err:
+        # A command whose optional dependency is missing (e.g. PySide6 for gui) must say so.
+        print(f"taptune {command}: not available here ({err})", file=sys.stderr)
+        return 1
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: usage errors exit 2, --help exits 0
