@@ -144,8 +144,9 @@ class BatchOptions:
     force: bool = False  # redo recordings identified before with the same content
     joint: bool = False  # one joint fit per holder instead of one fit per recording
     save: bool = True  # store the holders in the library
-    population: int | None = None  # GA budget overrides (tests, quick looks)
+    population: int | None = None  # optimiser budget overrides (tests, quick looks)
     generations: int | None = None
+    polish_evaluations: int | None = None
     keep_pages: bool = False  # return what a PDF report needs (BatchResult.pages)
 
     def identify_options(self):
@@ -157,7 +158,10 @@ class BatchOptions:
             ga = replace(ga, population=self.population)
         if self.generations is not None:
             ga = replace(ga, generations=self.generations)
-        return IdentifyOptions(seed=self.seed, jobs=1, ga=ga)
+        options = IdentifyOptions(seed=self.seed, jobs=1, ga=ga)
+        if self.polish_evaluations is not None:
+            options = replace(options, polish_evaluations=self.polish_evaluations)
+        return options
 
     def worker_count(self, n_jobs: int) -> int:
         """Processes to start for ``n_jobs`` jobs."""
@@ -293,8 +297,9 @@ def _skip_from_json(item: Item, group_hashes: frozenset[str]) -> Row | None:
 def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str]) -> Row | None:
     """A skipped row if the library's provenance holds this recording with this tool and stick-out.
 
-    For a joint group every recording must come from one identification (records of one
-    fit share its objective value).
+    The recording must have been fitted in the same company: alone for a single fit, with
+    exactly the group's recordings for a joint one (the records of one fit share its
+    objective value).
     """
     entry = entries.get(item.holder)
     if entry is None:
@@ -306,9 +311,9 @@ def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str]) 
     ]
     for record in reversed(mine):
         together = {r.sha256 for r in entry.identifications if r.objective == record.objective}
-        if group_hashes <= together:
-            modes = [f for f in record.bending_model_hz]
-            return Row(str(item.path), item.holder, "skipped", _three(record.bending_measured_hz), _three(modes),
+        if together == group_hashes:
+            return Row(str(item.path), item.holder, "skipped", _three(record.bending_measured_hz),
+                       _three(record.bending_model_hz),
                        record.objective, None,
                        f"identified before (same sha256 {item.sha256[:12]} in the library, {record.date})")
     return None

@@ -29,6 +29,7 @@ def add_parser(sub, name, help_text):
     # Optimiser budget: for tests and quick looks, not for real identifications.
     p.add_argument("--population", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--generations", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--polish-evaluations", type=int, default=None, help=argparse.SUPPRESS)
     return p
 
 
@@ -36,10 +37,10 @@ def _check(args) -> None:
     from taptune.cli.common import output_path
     from taptune.errors import InputError
 
-    for flag in ("jobs", "population", "generations"):
+    for flag in ("jobs", "population", "generations", "polish_evaluations"):
         value = getattr(args, flag)
         if value is not None and value < 1:
-            raise InputError(f"--{flag} must be at least 1, got {value}")
+            raise InputError(f"--{flag.replace('_', '-')} must be at least 1, got {value}")
     output_path(args.report, "report")
 
 
@@ -79,6 +80,7 @@ def run(args) -> int:
     options = BatchOptions(
         out_dir=Path(args.out), library=args.library, jobs=args.jobs, seed=args.seed, force=args.force,
         joint=args.joint, save=not args.no_save, population=args.population, generations=args.generations,
+        polish_evaluations=args.polish_evaluations,
         keep_pages=bool(args.report),
     )
     bar = ProgressBar("batch")

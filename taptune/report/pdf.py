@@ -13,6 +13,7 @@ imported only when drawing.
 
 from __future__ import annotations
 
+import contextlib
 import textwrap
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -23,6 +24,7 @@ from taptune.errors import InputError
 PAGE_SIZE_IN = (11.69, 8.27)  # A4 landscape
 STICKOUT_OFFSETS_MM = (-20.0, -10.0, 0.0, 10.0, 20.0)
 SUMMARY_ROWS_PER_PAGE = 28
+_SPREAD_FORMAT = "{:.2g}"
 _PARAM_ROWS = (  # name, label, unit, format
     ("k_tt", "k_tt", "N/m/mm", "{:.4g}"),
     ("k_rr", "k_rr", "N·m/rad/mm", "{:.4g}"),
@@ -142,8 +144,8 @@ def report_pages(result, analyses, recordings, assemblies, model_options=None) -
 # ----------------------------------------------------------------------------- drawing
 
 
-def _table(ax, cells, header, col_widths, title: str, font: float = 8.5) -> None:
-    """A plain table filling the top of ``ax`` (axis hidden)."""
+def _table(ax, cells, header, col_widths, title: str, font: float = 8.5, left=(0,)) -> None:
+    """A plain table filling the top of ``ax`` (axis hidden); text columns ``left`` are left-aligned."""
     ax.axis("off")
     ax.set_title(title, fontsize=10, loc="left", fontweight="bold")
     table = ax.table(cellText=cells, colLabels=header, colWidths=col_widths, loc="upper center", cellLoc="right")
@@ -155,7 +157,7 @@ def _table(ax, cells, header, col_widths, title: str, font: float = 8.5) -> None
         if r == 0:
             cell.set_facecolor("0.92")
             cell.set_text_props(fontweight="bold")
-        if c == 0:
+        if c in left:
             cell.set_text_props(ha="left")
             cell._loc = "left"
 
@@ -164,7 +166,7 @@ def parameter_cells(result) -> list[list[str]]:
     """Rows (parameter, value, ± spread, unit) of the parameter table."""
     spread = result.param_spread
     return [
-        [label, fmt.format(getattr(result.params, name)), "± " + fmt.format(spread[name]).lstrip("+"), unit]
+        [label, fmt.format(getattr(result.params, name)), "± " + _SPREAD_FORMAT.format(spread[name]), unit]
         for name, label, unit, fmt in _PARAM_ROWS
     ]
 
@@ -200,14 +202,17 @@ def provenance_text(page: ReportPage) -> str:
         lines.append(_shorten("joint fit with " + ", ".join(others), 80))
     warnings = list(getattr(page.analysis, "warnings", ())) + list(r.warnings)
     for w in warnings[:3]:
-        lines += textwrap.wrap("warning: " + w, 80, subsequent_indent="  ")[:2]
+        lines += textwrap.wrap("warning: " + w, 66, subsequent_indent="  ")[:2]
     if len(warnings) > 3:
         lines.append(f"… and {len(warnings) - 3} more warnings")
     return "\n".join(lines)
 
 
-def _shorten(text: str, width: int) -> str:
-    return text if len(text) <= width else "…" + text[-(width - 1):]
+def _shorten(text: str, width: int, keep_start: bool = False) -> str:
+    """At most ``width`` characters; paths keep their end, names their start."""
+    if len(text) <= width:
+        return text
+    return text[: width - 1] + "…" if keep_start else "…" + text[-(width - 1):]
 
 
 def draw_page(fig, page: ReportPage) -> None:
@@ -216,15 +221,15 @@ def draw_page(fig, page: ReportPage) -> None:
 
     fig.suptitle(f"{page.holder} — {Path(page.file).name} — stick-out {page.stickout_mm:.1f} mm",
                  fontsize=12, fontweight="bold")
-    left, right = fig.subfigures(1, 2, width_ratios=[1.45, 1], wspace=0.02)
+    left, right = fig.subfigures(1, 2, width_ratios=[1.2, 1], wspace=0.02)
     draw_identification(left, page.result, [page.analysis], title="")
     left.suptitle("")  # the parameters are in the table on the right, with their spread
     axes = right.subplots(3, 1, gridspec_kw={"height_ratios": [1.15, 0.95, 1.3]})
     _table(axes[0], parameter_cells(page.result), ["parameter", "value", "spread", "unit"],
-           [0.26, 0.26, 0.24, 0.24], "Identified parameters (± half-range of the near-optimal set)")
+           [0.22, 0.28, 0.22, 0.28], "Identified parameters (± half-range of the near-optimal set)")
     _table(axes[1], prediction_cells(page.predictions, page.stickout_mm),
-           ["stick-out [mm]", "f1 [Hz]", "f2 [Hz]", "f3 [Hz]", "ζ1 [%]"],
-           [0.2, 0.2, 0.2, 0.2, 0.14], "Predicted bending modes (* = recorded stick-out)")
+           ["stick-out", "f1", "f2", "f3", "ζ1 [%]"],
+           [0.17, 0.22, 0.22, 0.22, 0.14], "Predicted bending modes [Hz] (stick-out in mm, * = recorded)")
     axes[2].axis("off")
     axes[2].set_title("Provenance", fontsize=10, loc="left", fontweight="bold")
     axes[2].text(0.0, 1.0, provenance_text(page), va="top", ha="left", family="monospace", fontsize=7.5,
@@ -238,10 +243,11 @@ def draw_summary_page(fig, rows, first: int, title: str) -> None:
     cells = []
     for r in chunk:
         model = ["" if f is None else f"{f:.0f}" for f in r.model_hz]
-        cells.append([_shorten(r.file, 46), _shorten(r.holder, 26), r.status, *model, _shorten(r.message, 60)])
+        cells.append([_shorten(r.file, 46), _shorten(r.holder, 26, True), r.status, *model,
+                      _shorten(r.message, 70, True)])
     fig.suptitle(title, fontsize=12, fontweight="bold")
     _table(ax, cells, ["file", "holder", "status", "f1 [Hz]", "f2 [Hz]", "f3 [Hz]", "message"],
-           [0.27, 0.15, 0.06, 0.06, 0.06, 0.06, 0.34], "", font=7)
+           [0.27, 0.15, 0.06, 0.06, 0.06, 0.06, 0.34], "", font=7, left=(0, 1, 2, 6))
 
 
 def write_report(path, pages: Sequence[ReportPage], summary_rows: Sequence = (), title: str = "taptune report") -> None:
@@ -254,14 +260,14 @@ def write_report(path, pages: Sequence[ReportPage], summary_rows: Sequence = (),
 
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp")
+    written = False
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with PdfPages(tmp, metadata={"Title": title, "Creator": "taptune"}) as pdf:
-            for first in range(0, len(summary_rows), SUMMARY_ROWS_PER_PAGE):
-                n_pages = -(-len(summary_rows) // SUMMARY_ROWS_PER_PAGE)
+            n_summary = -(-len(summary_rows) // SUMMARY_ROWS_PER_PAGE)
+            for k in range(n_summary):
                 fig = plt.figure(figsize=PAGE_SIZE_IN, layout="constrained")
-                page_no = first // SUMMARY_ROWS_PER_PAGE + 1
-                draw_summary_page(fig, summary_rows, first, f"{title} — summary ({page_no}/{n_pages})")
+                draw_summary_page(fig, summary_rows, k * SUMMARY_ROWS_PER_PAGE, f"{title} — summary ({k + 1}/{n_summary})")
                 pdf.savefig(fig)
                 plt.close(fig)
             for page in pages:
@@ -270,9 +276,13 @@ def write_report(path, pages: Sequence[ReportPage], summary_rows: Sequence = (),
                 pdf.savefig(fig)
                 plt.close(fig)
         tmp.replace(path)  # a reader never sees half a report
+        written = True
     except OSError as err:
-        tmp.unlink(missing_ok=True)
         raise InputError(f"{path}: cannot write the report ({err.strerror})") from None
+    finally:
+        if not written:
+            with contextlib.suppress(OSError):
+                tmp.unlink(missing_ok=True)
 
 
 def write_identification_report(path, result, analyses, recordings, assemblies, model_options=None) -> None:

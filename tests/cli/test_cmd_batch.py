@@ -1,0 +1,178 @@
+"""``taptune batch``: a folder with good, corrupt and unmatched recordings; reruns; concurrency.
+
+Recordings are synthesised from the model (tests/test_batch.py); the optimiser budget is
+tiny (hidden --population/--generations/--polish-evaluations), so these runs check the
+batch behaviour, not the quality of the fit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.test_batch import assembly_text, write_bad_files, write_case
+
+from taptune.batch import read_summary
+from taptune.cli import main
+from taptune.library import HolderLibrary
+
+REPO = Path(__file__).resolve().parents[2]
+BUDGET = ["--population", "8", "--generations", "2", "--polish-evaluations", "20"]
+GOOD = {"a/one": "ER32 alpha", "a/two": "Shrink beta", "b/three": "Weldon gamma"}
+
+
+def run_cli(args, capsys):
+    code = main(["batch", *map(str, args)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def failed_list(stdout: str) -> list[str]:
+    """The file names of the final 'N files failed:' list."""
+    lines = stdout.split("files failed:\n", 1)[-1].splitlines() if "failed:\n" in stdout else []
+    return sorted(Path(line.strip().split(": ", 1)[0]).name for line in lines if line.startswith("  "))
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    root = tmp_path_factory.mktemp("recordings")
+    for i, (stem, holder) in enumerate(GOOD.items()):
+        write_case(root / Path(stem).parent, Path(stem).name, holder, stickout_mm=50.0 + 3 * i, seed=i)
+    write_bad_files(root / "bad")
+    return root
+
+
+def test_bad_files_are_listed_and_never_stop_the_batch_then_a_rerun_skips_and_force_redoes(folder, tmp_path, capsys):
+    out, lib = tmp_path / "out", tmp_path / "lib.json"
+    args = [folder, "--out", out, "--library", lib, "--jobs", "2", *BUDGET]
+
+    code, stdout, stderr = run_cli(args, capsys)
+    assert code == 1
+    assert "Traceback" not in stdout + stderr
+    assert failed_list(stdout) == ["lonely.wav", "notes.wav", "truncated.wav"]
+    rows = {Path(r["file"]).name: r for r in read_summary(out / "summary.csv")}
+    assert {n: r["status"] for n, r in rows.items()} == {
+        "one.wav": "ok", "two.wav": "ok", "three.wav": "ok",
+        "truncated.wav": "failed", "notes.wav": "failed", "lonely.wav": "failed",
+    }
+    assert "notes.wav" in rows["notes.wav"]["message"] and "\n" not in rows["notes.wav"]["message"]
+    assert "no assembly" in rows["lonely.wav"]["message"]
+    assert rows["one.wav"]["holder"] == "ER32 alpha"
+    for name in ("one", "two", "three"):
+        assert float(rows[f"{name}.wav"]["f1_model_hz"]) > 1000
+        assert float(rows[f"{name}.wav"]["f1_measured_hz"]) > 1000
+    assert HolderLibrary(lib).names() == sorted(GOOD.values())
+
+    # One JSON per good recording, with the keys of `taptune identify --json`.
+    doc = json.loads((out / "a" / "one.json").read_text())
+    for key in ("file", "holder", "sample_rate", "taps", "peaks", "bending_measured_hz", "bending_model_hz",
+                "params", "objective", "evaluations", "seconds", "warnings"):
+        assert key in doc
+    assert doc["file"] == str(folder / "a" / "one.wav") and len(doc["sha256"]) == 64
+    assert not (out / "bad" / "notes.json").exists()
+
+    code, stdout, _ = run_cli(args, capsys)
+    assert code == 1  # the bad files are still bad
+    statuses = {Path(r["file"]).name: r["status"] for r in read_summary(out / "summary.csv")}
+    assert [statuses[f"{n}.wav"] for n in ("one", "two", "three")] == ["skipped"] * 3
+    assert failed_list(stdout) == ["lonely.wav", "notes.wav", "truncated.wav"]
+
+    code, _, _ = run_cli([*args, "--force"], capsys)
+    assert code == 1
+    statuses = {Path(r["file"]).name: r["status"] for r in read_summary(out / "summary.csv")}
+    assert [statuses[f"{n}.wav"] for n in ("one", "two", "three")] == ["ok"] * 3
+    history = HolderLibrary(lib).get("ER32 alpha").identifications
+    assert [r.recording for r in history] == ["one.wav", "one.wav"]
+
+
+def test_the_library_alone_is_enough_to_skip(folder, tmp_path, capsys):
+    lib = tmp_path / "lib.json"
+    good = [folder / "a" / "one.wav"]
+    assert run_cli([*good, "--out", tmp_path / "first", "--library", lib, *BUDGET], capsys)[0] == 0
+    code, stdout, _ = run_cli([*good, "--out", tmp_path / "second", "--library", lib, *BUDGET], capsys)
+    assert code == 0
+    assert stdout.startswith("skipped")
+    assert read_summary(tmp_path / "second" / "summary.csv")[0]["status"] == "skipped"
+
+
+def test_a_changed_assembly_is_identified_again(tmp_path, capsys):
+    wav = write_case(tmp_path / "rec", "x", "ER32 x")
+    args = [wav, "--out", tmp_path / "out", "--library", tmp_path / "lib.json", *BUDGET]
+    assert run_cli(args, capsys)[0] == 0
+    (tmp_path / "rec" / "x.toml").write_text(assembly_text("ER32 x", stickout_mm=54.0))
+    run_cli(args, capsys)
+    assert read_summary(tmp_path / "out" / "summary.csv")[0]["status"] == "ok"
+
+
+def test_batch_report_has_a_summary_and_a_page_per_identified_recording(folder, tmp_path, capsys):
+    pdf = tmp_path / "report.pdf"
+    args = [folder / "a", folder / "bad" / "notes.wav", "--out", tmp_path / "out", "--no-save", "--report", pdf, *BUDGET]
+    code, stdout, _ = run_cli(args, capsys)
+    assert code == 1
+    pages = re.findall(rb"/Type\s*/Page\b(?!s)", pdf.read_bytes())
+    assert len(pages) == 1 + 2  # summary + one.wav + two.wav
+    assert f"report: {pdf}" in stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--jobs", "0"], "--jobs must be at least 1"),
+    (["--population", "0"], "--population must be at least 1"),
+])
+def test_bad_options_exit_2_with_one_line(tmp_path, capsys, args, message):
+    code, _, err = run_cli([tmp_path, *args], capsys)
+    assert code == 2
+    assert message in err and err.count("\n") == 1
+
+
+def test_nothing_to_do_is_bad_input(tmp_path, capsys):
+    code, _, err = run_cli([tmp_path, "--out", tmp_path / "out"], capsys)
+    assert (code, err.count("\n")) == (2, 1)
+    assert "no .wav or .flac recording" in err
+
+
+def test_two_batches_at_once_on_one_library_lose_nothing(tmp_path):
+    """Real processes (python -m taptune batch) write the same library file at the same time."""
+    holders = {}
+    for batch in ("p", "q"):
+        for i in range(3):
+            holder = f"ER32 {batch}{i}"
+            write_case(tmp_path / batch, f"{batch}{i}", holder, stickout_mm=49.0 + 2 * i, seed=i)
+            holders[holder] = batch
+    lib = tmp_path / "shared" / "lib.json"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-m", "taptune", "batch", str(tmp_path / batch), "--out", str(tmp_path / f"out-{batch}"),
+             "--library", str(lib), "--jobs", "2", *BUDGET],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path,
+        )
+        for batch in ("p", "q")
+    ]
+    results = [p.communicate(timeout=600) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], results
+    entries = HolderLibrary(lib).entries()
+    assert sorted(entries) == sorted(holders)
+    assert all(len(e.identifications) == 1 for e in entries.values())
+
+
+@pytest.mark.slow
+def test_fifty_recordings_with_a_few_bad_ones(tmp_path, capsys):
+    """The 50-recording run: 46 good (8 holders), 4 bad; completes and lists exactly the bad ones."""
+    for i in range(46):
+        write_case(tmp_path / "rec" / f"h{i % 8}", f"r{i:02d}", f"ER32 h{i % 8}", stickout_mm=45.0 + (i % 6) * 3, seed=i)
+    write_bad_files(tmp_path / "rec" / "bad")
+    (tmp_path / "rec" / "bad" / "empty.wav").write_bytes(b"")
+    (tmp_path / "rec" / "bad" / "empty.toml").write_text(assembly_text("ER32 empty"))
+    code, stdout, _ = run_cli([tmp_path / "rec", "--out", tmp_path / "out", "--library", tmp_path / "lib.json",
+                               "--joint", *BUDGET], capsys)
+    assert code == 1
+    assert failed_list(stdout) == ["empty.wav", "lonely.wav", "notes.wav", "truncated.wav"]
+    rows = read_summary(tmp_path / "out" / "summary.csv")
+    assert len(rows) == 50 and sum(r["status"] == "ok" for r in rows) == 46
+    assert HolderLibrary(tmp_path / "lib.json").names() == sorted(f"ER32 h{k}" for k in range(8))

@@ -1,0 +1,263 @@
+"""The batch engine: discovery, pairing, result names, skip-by-hash, isolation of failures.
+
+The end-to-end runs (real identifications in worker processes) use tap recordings
+synthesised from the model (reference assembly of MODEL.md §13.4, nominal holder) with a
+tiny optimiser budget: they check the machinery, not the accuracy of the fit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.conftest import REFERENCE_TOML
+
+from taptune.batch import (
+    BatchOptions,
+    Row,
+    discover,
+    find_assembly,
+    one_line,
+    plan,
+    read_summary,
+    result_names,
+    run_batch,
+)
+from taptune.errors import InputError
+
+FS = 48000
+TINY = dict(population=8, generations=2, polish_evaluations=20)
+
+
+# ----------------------------------------------------------------------------- test data
+
+
+def assembly_text(holder: str = "ER32 test holder", stickout_mm: float = 53.5) -> str:
+    """The reference assembly TOML with another holder name and stick-out."""
+    return (REFERENCE_TOML.replace('name = "ER32 collet chuck HSK-A63 x 100"', f'name = "{holder}"')
+            .replace("stickout = 53.5", f"stickout = {stickout_mm}"))
+
+
+def tap_samples(assembly, params=None, seed: int = 0, taps=(0.1, 0.6, 1.1), seconds: float = 1.6) -> np.ndarray:
+    """Three taps on the tool tip: the model's tip velocity response plus white noise at −74 dB.
+
+    The receptance is band-limited (250 Hz … 0.45·fs, tapered) so the free-free rigid-body
+    terms and the band edges do not ring; each tap response lasts 0.4 s.
+    """
+    from taptune.model import NOMINAL, build_model, tip_receptance
+
+    n = int(0.4 * FS)
+    f = np.fft.rfftfreq(n, 1 / FS)
+    band = (f > 250) & (f < 0.45 * FS)
+    h = np.zeros(len(f), complex)
+    h[band] = tip_receptance(build_model(assembly), params or NOMINAL, f[band])
+    taper = np.clip((f - 250) / 250, 0, 1) * np.clip((0.45 * FS - f) / 2000, 0, 1)
+    impulse = np.fft.irfft(h * taper * 2j * np.pi * f, n)
+    impulse /= np.abs(impulse).max()
+    x = np.zeros(int(seconds * FS))
+    for t0 in taps:
+        i = int(t0 * FS)
+        x[i:i + n] += 0.5 * impulse[: len(x) - i]
+    return x + 2e-4 * np.random.default_rng(seed).standard_normal(len(x))
+
+
+def write_case(folder: Path, stem: str, holder: str, stickout_mm: float = 53.5, seed: int = 0,
+               with_toml: bool = True, suffix: str = ".wav") -> Path:
+    """A synthetic recording ``folder/stem.wav`` and (optionally) its ``stem.toml``."""
+    from taptune.io.assembly import parse_assembly
+    from taptune.io.audio import write_audio
+
+    import tomllib
+
+    folder.mkdir(parents=True, exist_ok=True)
+    text = assembly_text(holder, stickout_mm)
+    asm = parse_assembly(tomllib.loads(text), stem)
+    wav = folder / f"{stem}{suffix}"
+    write_audio(wav, tap_samples(asm, seed=seed), FS)
+    if with_toml:
+        (folder / f"{stem}.toml").write_text(text)
+    return wav
+
+
+def write_bad_files(folder: Path) -> dict[str, Path]:
+    """A truncated WAV, a text file named .wav and a good WAV without assembly, each with its toml where it has one."""
+    folder.mkdir(parents=True, exist_ok=True)
+    good = write_case(folder / "tmp", "donor", "ER32 donor")
+    truncated = folder / "truncated.wav"
+    truncated.write_bytes(good.read_bytes()[:30])
+    (folder / "truncated.toml").write_text(assembly_text("ER32 truncated"))
+    text = folder / "notes.wav"
+    text.write_text("these are my notes, not audio\n")
+    (folder / "notes.toml").write_text(assembly_text("ER32 notes"))
+    orphan = folder / "orphan" / "lonely.wav"
+    orphan.parent.mkdir()
+    orphan.write_bytes(good.read_bytes())
+    for f in (folder / "tmp").iterdir():
+        f.unlink()
+    (folder / "tmp").rmdir()
+    return {"truncated": truncated, "text": text, "orphan": orphan}
+
+
+# ----------------------------------------------------------------------------- discovery and pairing
+
+
+def test_discover_is_recursive_sorted_case_insensitive_and_reports_missing_paths(tmp_path):
+    for name in ("b/z.WAV", "a/y.flac", "a/x.wav", "a/notes.txt", "c.wav"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_bytes(b"x")
+    files, missing = discover([tmp_path, tmp_path / "a" / "x.wav", tmp_path / "nope"])
+    rel = [str(f.relative_to(tmp_path)) for f in files]
+    assert rel == ["a/x.wav", "a/y.flac", "b/z.WAV", "c.wav"]  # sorted, once each, no .txt
+    assert [r.status for r in missing] == ["failed"]
+    assert "no such file or folder" in missing[0].message
+
+
+def test_an_explicitly_named_file_is_taken_whatever_its_extension(tmp_path):
+    f = tmp_path / "recording.aiff"
+    f.write_bytes(b"x")
+    assert discover([f])[0] == [f]
+
+
+def test_assembly_is_the_option_then_the_same_stem_then_assembly_toml(tmp_path):
+    wav = tmp_path / "tap1.wav"
+    assert find_assembly(wav) is None
+    (tmp_path / "assembly.toml").write_text("")
+    assert find_assembly(wav) == tmp_path / "assembly.toml"
+    (tmp_path / "tap1.toml").write_text("")
+    assert find_assembly(wav) == tmp_path / "tap1.toml"
+    assert find_assembly(wav, "other.toml") == Path("other.toml")
+
+
+def test_result_names_keep_folders_and_separate_equal_stems(tmp_path):
+    files = [tmp_path / "d01" / "tap.wav", tmp_path / "d02" / "tap.wav", tmp_path / "d02" / "tap.flac"]
+    names = result_names(files)
+    assert [str(names[f]) for f in files] == ["d01/tap.json", "d02/tap.wav.json", "d02/tap.flac.json"]
+    assert result_names([tmp_path / "x.wav"]) == {tmp_path / "x.wav": Path("x.json")}
+
+
+def test_rows_become_csv_cells_in_header_order():
+    row = Row("a.wav", "H", "ok", (1000.0, 2000.0, None), (1000.25, 2000.0, 3000.0), 0.5, 1.234, "")
+    assert row.csv_cells() == ["a.wav", "H", "ok", "1000.00", "2000.00", "", "1000.25", "2000.00", "3000.00",
+                               "0.500000", "1.23", ""]
+    assert not row.failed and Row("b.wav", "", "error").failed
+
+
+def test_one_line_messages_name_unexpected_types_and_never_span_lines():
+    assert one_line(InputError("x.wav: the file is empty")) == "x.wav: the file is empty"
+    assert one_line(ValueError("bad\n  value")) == "ValueError: bad value"
+    assert len(one_line("y" * 5000)) == 400
+
+
+def test_plan_fails_each_unusable_file_and_keeps_the_rest(tmp_path):
+    write_case(tmp_path, "good", "ER32 good")
+    bad = write_bad_files(tmp_path)
+    (tmp_path / "broken.wav").write_bytes(b"x")
+    (tmp_path / "broken.toml").write_text("[holder\n")
+    options = BatchOptions(out_dir=tmp_path / "out", library=str(tmp_path / "lib.json"))
+    p = plan([tmp_path], options)
+    assert [str(job[0].path) for job in p.jobs] == [str(tmp_path / f) for f in ("good.wav", "notes.wav", "truncated.wav")]
+    decided = {Path(r.file).name: r for r in p.decided}
+    assert set(decided) == {"broken.wav", bad["orphan"].name}
+    assert "broken.toml" in decided["broken.wav"].message
+    assert "no assembly" in decided["lonely.wav"].message
+
+
+def test_plan_with_nothing_to_do_is_bad_input(tmp_path):
+    with pytest.raises(InputError, match="no .wav or .flac"):
+        plan([tmp_path], BatchOptions(out_dir=tmp_path / "out"))
+
+
+def test_joint_plan_groups_by_holder_name(tmp_path):
+    for stem, holder in (("a1", "A"), ("b1", "B"), ("a2", "A")):
+        (tmp_path / f"{stem}.wav").write_bytes(b"x")
+        (tmp_path / f"{stem}.toml").write_text(assembly_text(holder))
+    options = BatchOptions(out_dir=tmp_path / "out", library=str(tmp_path / "lib.json"), joint=True)
+    jobs = plan([tmp_path], options).jobs
+    assert [[i.path.name for i in job] for job in jobs] == [["a1.wav", "a2.wav"], ["b1.wav"]]
+    separate = plan([tmp_path], BatchOptions(out_dir=tmp_path / "out", library=str(tmp_path / "lib.json")))
+    assert any("holder 'A'" in n and "--joint" in n for n in separate.notes)
+
+
+# ----------------------------------------------------------------------------- real runs
+
+
+def tiny(tmp_path, **kw) -> BatchOptions:
+    return BatchOptions(out_dir=tmp_path / "out", library=str(tmp_path / "lib.json"), jobs=2, **TINY, **kw)
+
+
+def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monkeypatch):
+    import taptune.batch as batch
+
+    for stem in ("a", "b"):
+        (tmp_path / f"{stem}.wav").write_bytes(b"x")
+        (tmp_path / f"{stem}.toml").write_text(assembly_text(stem))
+    real = batch.run_job
+
+    def crash_on_a(items, options, progress=None):
+        if items[0].path.name == "a.wav":
+            os._exit(3)  # what a segfault or the OOM killer looks like from outside
+        return real(items, options, progress)
+
+    monkeypatch.setattr(batch, "run_job", crash_on_a)  # workers are forked: they see it
+    result = run_batch([tmp_path], tiny(tmp_path))
+    by_name = {Path(r.file).name: r for r in result.rows}
+    assert by_name["a.wav"].status == "error"
+    assert "ended without a result (exit code 3)" in by_name["a.wav"].message
+    assert by_name["b.wav"].status == "failed"  # b.wav is 1 byte of junk: bad input, not a crash
+    assert result.exit_status == 1
+
+
+def test_an_unexpected_exception_is_one_line_and_its_traceback_goes_to_the_log(tmp_path, monkeypatch):
+    import taptune.identify.pipeline as pipeline
+
+    write_case(tmp_path, "a", "ER32 a")
+
+    def boom(*args, **kwargs):
+        raise ZeroDivisionError("division by zero\nsecond line")
+
+    monkeypatch.setattr(pipeline, "analyse_for_assembly", boom)
+    result = run_batch([tmp_path], tiny(tmp_path))
+    (row,) = result.rows
+    assert (row.status, row.message) == ("error", "ZeroDivisionError: division by zero second line")
+    assert "Traceback" in (tmp_path / "out" / "errors.log").read_text()
+
+
+@pytest.fixture(scope="module")
+def joint_folder(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("joint")
+    write_case(folder, "short", "ER32 joint", stickout_mm=48.5, seed=1)
+    write_case(folder, "long", "ER32 joint", stickout_mm=58.5, seed=2)
+    return folder
+
+
+def test_joint_batch_fits_a_holder_once_and_writes_one_json_per_recording(joint_folder, tmp_path):
+    from taptune.library import HolderLibrary
+
+    result = run_batch([joint_folder], tiny(tmp_path, joint=True))
+    assert [r.status for r in result.rows] == ["ok", "ok"], result.rows
+    docs = {name: json.loads((tmp_path / "out" / f"{name}.json").read_text()) for name in ("long", "short")}
+    assert docs["long"]["params"] == docs["short"]["params"]  # one parameter set for the holder
+    assert docs["long"]["joint"]["files"] == [str(joint_folder / "long.wav"), str(joint_folder / "short.wav")]
+    assert docs["short"]["file"] == str(joint_folder / "short.wav")
+    assert len(docs["short"]["bending_model_hz"]) == 3  # this recording's modes, not a list per recording
+    entry = HolderLibrary(tmp_path / "lib.json").get("ER32 joint")
+    assert sorted(r.recording for r in entry.identifications) == ["long.wav", "short.wav"]
+
+    again = run_batch([joint_folder], tiny(tmp_path, joint=True))
+    assert [r.status for r in again.rows] == ["skipped", "skipped"]
+    # The same recordings fitted one by one are new work: a joint result does not stand for them.
+    single = run_batch([joint_folder / "short.wav"], tiny(tmp_path))
+    assert [r.status for r in single.rows] == ["ok"]
+
+
+def test_summary_csv_round_trips(tmp_path):
+    write_case(tmp_path, "a", "ER32 a")
+    result = run_batch([tmp_path], tiny(tmp_path, save=False))
+    rows = read_summary(result.summary_path)
+    assert [r["status"] for r in rows] == ["ok"]
+    assert float(rows[0]["f1_model_hz"]) == pytest.approx(result.rows[0].model_hz[0], abs=0.01)
+    assert not (tmp_path / "lib.json").exists()  # save=False leaves the library alone
