@@ -14,6 +14,7 @@ per node; the tool-tip w DOF is the second-to-last.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -58,6 +59,91 @@ def rigid_body_vectors(z_nodes) -> tuple[np.ndarray, np.ndarray]:
     r[0::2] = z
     r[1::2] = 1.0
     return t, r
+
+
+PIECES = ("K_tool", "K_holder", "M_tool", "M_holder", "T0", "T1", "R0", "R1")
+
+
+@dataclass(frozen=True)
+class SparsePattern:
+    """The union sparsity pattern of all model pieces, with each piece's values on it.
+
+    With every piece on one pattern, K̃(p) and M(p) are a few vector operations on
+    ``nnz`` values instead of sparse-matrix additions.
+
+    Attributes
+    ----------
+    indptr, indices : ndarray, int
+        CSR structure (sorted column indices), n × n.
+    rows, cols : ndarray, int, shape (nnz,)
+        Row and column of every stored entry.
+    values : dict of str to ndarray, shape (nnz,)
+        Values of each piece (``PIECES``) on the pattern (0 where the piece has none).
+    """
+
+    n: int
+    indptr: np.ndarray
+    indices: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    values: dict
+
+    def csr(self, data) -> sp.csr_matrix:
+        """A CSR matrix with this pattern and the given values, (n, n)."""
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+
+def common_pattern(pieces: dict, n: int) -> SparsePattern:
+    """Union pattern of sparse matrices and their values aligned on it."""
+    union = sum(abs(m).tocsr() for m in pieces.values()).tocsr()
+    union.sort_indices()
+    rows = np.repeat(np.arange(n), np.diff(union.indptr))
+    cols = union.indices.astype(np.int64)
+    keys = rows.astype(np.int64) * n + cols
+    values = {}
+    for name, m in pieces.items():
+        c = m.tocoo()
+        pos = np.searchsorted(keys, c.row.astype(np.int64) * n + c.col)
+        v = np.zeros(len(keys), dtype=c.data.dtype)
+        np.add.at(v, pos, c.data)
+        values[name] = v
+    return SparsePattern(n, union.indptr.copy(), union.indices.copy(), rows, cols, values)
+
+
+@dataclass(frozen=True)
+class BandLayout:
+    """DOFs ordered by z give a narrow band (7 where only the contact couples the bodies).
+
+    Attributes
+    ----------
+    perm : ndarray, int, shape (n,)
+        Banded position → global DOF.
+    inverse : ndarray, int, shape (n,)
+        Global DOF → banded position.
+    bandwidth : int
+        Number of sub- (= super-) diagonals.
+    ab_rows, ab_cols : ndarray, int, shape (nnz,)
+        Where each pattern entry goes in LAPACK ``gbtrf`` band storage
+        (2·bandwidth + bandwidth + 1 rows).
+    """
+
+    perm: np.ndarray
+    inverse: np.ndarray
+    bandwidth: int
+    ab_rows: np.ndarray
+    ab_cols: np.ndarray
+
+
+def band_layout(z_nodes, pattern: SparsePattern) -> BandLayout:
+    """Order DOFs by node z (holder before tool at equal z, w before θ) and map the pattern."""
+    n = pattern.n
+    z = np.repeat(np.asarray(z_nodes, dtype=float), 2)
+    perm = np.lexsort((np.arange(n), z))
+    inverse = np.empty(n, dtype=int)
+    inverse[perm] = np.arange(n)
+    i, j = inverse[pattern.rows], inverse[pattern.cols]
+    bw = int(np.max(np.abs(i - j)))
+    return BandLayout(perm, inverse, bw, 2 * bw + i - j, j)
 
 
 @dataclass(frozen=True)
@@ -129,19 +215,39 @@ class FEModel:
     def r(self) -> np.ndarray:
         return self.rigid_vectors[1]
 
-    def stiffness(self, params: HolderParams) -> sp.csr_matrix:
-        """Complex global stiffness K̃ for a parameter set, (n_dofs, n_dofs)."""
+    @cached_property
+    def pattern(self) -> SparsePattern:
+        """All pieces on one sparsity pattern (computed once)."""
+        return common_pattern({name: getattr(self, name) for name in PIECES}, self.n_dofs)
+
+    @cached_property
+    def band(self) -> BandLayout:
+        """z-ordered banded layout of the pattern (computed once)."""
+        return band_layout(self.z_nodes, self.pattern)
+
+    def stiffness_values(self, params: HolderParams) -> np.ndarray:
+        """Values of K̃ on :attr:`pattern`, complex, shape (nnz,)."""
+        v = self.pattern.values
         a = params.alpha / 100.0
         return (
-            self.K_tool
-            + params.modulus_factor * self.K_holder
-            + params.c_t * (self.T0 + a * self.T1)
-            + params.c_r * (self.R0 + a * self.R1)
-        ).tocsr()
+            v["K_tool"]
+            + params.modulus_factor * v["K_holder"]
+            + params.c_t * (v["T0"] + a * v["T1"])
+            + params.c_r * (v["R0"] + a * v["R1"])
+        )
+
+    def mass_values(self, params: HolderParams) -> np.ndarray:
+        """Values of M on :attr:`pattern`, real, shape (nnz,)."""
+        v = self.pattern.values
+        return v["M_tool"] + params.density_factor * v["M_holder"]
+
+    def stiffness(self, params: HolderParams) -> sp.csr_matrix:
+        """Complex global stiffness K̃ for a parameter set, (n_dofs, n_dofs)."""
+        return self.pattern.csr(self.stiffness_values(params))
 
     def mass(self, params: HolderParams) -> sp.csr_matrix:
         """Real global mass M for a parameter set, (n_dofs, n_dofs)."""
-        return (self.M_tool + params.density_factor * self.M_holder).tocsr()
+        return self.pattern.csr(self.mass_values(params))
 
     def matrices(self, params: HolderParams) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """(K̃, M) for a parameter set."""
