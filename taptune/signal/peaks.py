@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.signal import find_peaks
 
 
@@ -117,8 +116,8 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
     prominence_db : ndarray, shape (p,)
     local_db : ndarray, shape (p,)
         Height above the ring median [dB].
-    hw_hz : ndarray, shape (p,)
-        Half-power half-width [Hz].
+    floor_db : ndarray, shape (p,)
+        Height above ``floor`` [dB].
     """
     f = np.asarray(freq_hz)
     m = np.asarray(mag, dtype=np.float64)
@@ -130,8 +129,9 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
     idx, props = find_peaks(db[lo:hi + 1], prominence=prominence_db)
     idx = idx + lo
     prom = props["prominences"]
-    keep = db[idx] - fl[idx] >= min_snr_db
-    idx, prom = idx[keep], prom[keep]
+    over = db[idx] - fl[idx]
+    keep = over >= min_snr_db
+    idx, prom, over = idx[keep], prom[keep], over[keep]
     hw = np.array([half_power_width(f, m, int(i)) for i in idx])
     ring = int(round(ring_hz / df))
     local = np.zeros(idx.size)
@@ -142,12 +142,12 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
         around = np.concatenate([left, right])
         local[k] = db[i] - (np.median(around) if around.size else -np.inf)
     keep = local >= min_local_db
-    idx, prom, local, hw = idx[keep], prom[keep], local[keep], hw[keep]
+    idx, prom, local, hw, over = idx[keep], prom[keep], local[keep], hw[keep], over[keep]
     if idx.size > max_peaks:
         top = np.sort(np.argsort(local)[::-1][:max_peaks])
-        idx, prom, local, hw = idx[top], prom[top], local[top], hw[top]
+        idx, prom, local, hw, over = idx[top], prom[top], local[top], hw[top], over[top]
     d, lev = parabolic_peak(db, idx)
-    return idx, f[idx] + d * df, lev, prom, local, hw
+    return idx, f[idx] + d * df, lev, prom, local, over
 
 
 def half_power_width(freq_hz, mag, i: int, max_hz: float = 2000.0) -> float:
@@ -172,21 +172,28 @@ def half_power_width(freq_hz, mag, i: int, max_hz: float = 2000.0) -> float:
     return float(min(widths)) * df
 
 
-def _basis(freq_hz, poles, sample_rate, f_c, w):
-    """Columns: one decaying sinusoid per pole (exact DFT), then 1 and (f − f_c)/w."""
+def _basis(freq_hz, fd, sig, sample_rate, f_c, w):
+    """Columns of one decaying sinusoid per pole (exact DFT) then 1 and (f − f_c)/w,
+    and the derivatives of the pole columns by fd [Hz] and σ [1/s]."""
     f = np.asarray(freq_hz)[:, None]
-    fd = poles[:, 0][None, :]
-    sig = poles[:, 1][None, :]
-    z = np.exp((-sig + 2j * np.pi * (fd - f)) / sample_rate)
+    z = np.exp((-sig[None, :] + 2j * np.pi * (fd[None, :] - f)) / sample_rate)
+    one_minus = 1.0 - z
     # 1/(1 − z) is the DFT of z^n, n = 0…∞; scaled by 1/fs so the columns are O(1/σ).
-    modes = 1.0 / ((1.0 - z) * sample_rate)
+    modes = 1.0 / (one_minus * sample_rate)
+    dz = z / (one_minus**2 * sample_rate**2)
+    d_fd = dz * (2j * np.pi)
+    d_sig = -dz
     bg = np.ones((f.shape[0], 2), dtype=complex)
     bg[:, 1] = (f[:, 0] - f_c) / w
-    return np.hstack([modes, bg])
+    return np.hstack([modes, bg]), d_fd, d_sig
 
 
-def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz: float):
+def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz: float,
+              max_iter: int = 40):
     """Fit poles shared by all taps to complex spectra in the band [lo_hz, hi_hz].
+
+    Variable projection (the residues and background solved linearly for given poles)
+    with Kaufman's Jacobian and Levenberg-Marquardt steps on (fd, log σ).
 
     Parameters
     ----------
@@ -200,6 +207,8 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
         Starting damped frequencies [Hz] and decay rates σ [1/s].
     lo_hz, hi_hz : float
         Band fitted [Hz].
+    max_iter : int
+        Iteration limit.
 
     Returns
     -------
@@ -211,7 +220,7 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
         Standard error of ``fd`` [Hz] from the residual and the Jacobian, for
         uncorrelated bins (multiply the variance by the zero-padding factor).
     ok : bool
-        The fit converged inside the band with positive decay.
+        The fit converged inside the band with a decay rate in range.
     """
     f = np.asarray(freq_hz)
     sel = (f >= lo_hz) & (f <= hi_hz)
@@ -220,39 +229,88 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
     f0 = np.atleast_1d(np.asarray(f0, dtype=np.float64))
     s0 = np.maximum(np.atleast_1d(np.asarray(sigma0, dtype=np.float64)), 1.0)
     j = f0.size
+    fail = (f0, s0, np.full(j, np.inf), False)
+    m, k = y.shape
+    n_lin = j + 2
+    if m < n_lin + 2:
+        return fail
     f_c = 0.5 * (lo_hz + hi_hz)
     w = max(0.5 * (hi_hz - lo_hz), 1e-9)
-    scale = np.max(np.abs(y)) + 1e-300
-    y = y / scale
+    y = y / (np.max(np.abs(y)) + 1e-300)
 
-    def resid(theta):
-        poles = np.column_stack([f_c + w * theta[:j], np.exp(theta[j:])])
-        b = _basis(fw, poles, sample_rate, f_c, w)
-        c, *_ = np.linalg.lstsq(b, y, rcond=None)
-        r = y - b @ c
-        return np.concatenate([r.real.ravel(), r.imag.ravel()])
+    def evaluate(fd, sig, jac: bool):
+        b, d_fd, d_sig = _basis(fw, fd, sig, sample_rate, f_c, w)
+        q, r_ = np.linalg.qr(b)
+        c = np.linalg.solve(r_, q.conj().T @ y) if np.all(np.abs(np.diag(r_)) > 1e-300) else None
+        if c is None:
+            return None, None
+        res = y - b @ c
+        if not jac:
+            return res, None
+        cols = []
+        for p in range(j):
+            for d, scale in ((d_fd[:, p], w), (d_sig[:, p], sig[p])):
+                v = (d * scale)[:, None] * c[p][None, :]   # ∂B/∂θ · c, (m, k)
+                v = v - q @ (q.conj().T @ v)               # projected out of span(B)
+                cols.append(-np.concatenate([v.real.ravel(), v.imag.ravel()]))
+        return res, np.column_stack(cols)
 
-    x0 = np.concatenate([(f0 - f_c) / w, np.log(s0)])
-    lb = np.concatenate([np.full(j, -1.0), np.full(j, np.log(0.05))])
-    ub = np.concatenate([np.full(j, 1.0), np.full(j, np.log(2 * np.pi * w * 4 + 10.0))])
-    x0 = np.clip(x0, lb + 1e-9, ub - 1e-9)
+    # θ = (u, v): fd = f_c + w·u, σ = exp(v); parameters ordered (u1, v1, u2, v2, …).
+    theta = np.empty(2 * j)
+    theta[0::2] = (f0 - f_c) / w
+    theta[1::2] = np.log(s0)
+    lam = 1e-3
+    res, jm = evaluate(f_c + w * theta[0::2], np.exp(theta[1::2]), True)
+    if res is None:
+        return fail
+    cost = float(np.sum(np.abs(res) ** 2))
+    for _ in range(max_iter):
+        r_vec = np.concatenate([res.real.ravel(), res.imag.ravel()])
+        jtj = jm.T @ jm
+        g = jm.T @ r_vec
+        improved = converged = False
+        for _ in range(10):
+            a = jtj + lam * np.diag(np.diag(jtj) + 1e-12)
+            try:
+                step = -np.linalg.solve(a, g)
+            except np.linalg.LinAlgError:
+                lam *= 10
+                continue
+            # Converged: the frequency would move by < 1e-6 of the half-band, the decay
+            # by < 1e-4 (relative).
+            if np.max(np.abs(step[0::2])) < 1e-6 and np.max(np.abs(step[1::2])) < 1e-4:
+                converged = True
+                break
+            trial = theta + step
+            trial[1::2] = np.clip(trial[1::2], -5.0, 30.0)
+            res_t, _ = evaluate(f_c + w * trial[0::2], np.exp(trial[1::2]), False)
+            if res_t is not None:
+                cost_t = float(np.sum(np.abs(res_t) ** 2))
+                if cost_t < cost:
+                    improved = True
+                    break
+            lam *= 10
+        if converged or not improved:
+            break
+        theta, lam = trial, max(lam / 10, 1e-9)
+        done = cost - cost_t <= 1e-10 * cost
+        res, jm = evaluate(f_c + w * theta[0::2], np.exp(theta[1::2]), True)
+        cost = cost_t
+        if done:
+            break
+    fd = f_c + w * theta[0::2]
+    sig = np.exp(theta[1::2])
+    inside = (np.all(np.abs(theta[0::2]) < 0.98) and np.all(sig < 2 * np.pi * w * 4 + 10.0)
+              and np.all(sig > 0.05))
+    n_res = 2 * m * k
+    n_par = 2 * j + 2 * k * n_lin
+    s2 = cost / max(n_res - n_par, 1)
     try:
-        res = least_squares(resid, x0, bounds=(lb, ub), method="trf", x_scale="jac",
-                            xtol=1e-10, ftol=1e-10, max_nfev=60 * (2 * j + 1))
-    except (ValueError, np.linalg.LinAlgError):
-        return f0, s0, np.full(j, np.inf), False
-    fd = f_c + w * res.x[:j]
-    sig = np.exp(res.x[j:])
-    inside = np.all(np.abs(res.x[:j]) < 0.98) and np.all(res.x[j:] < ub[j:] - 1e-3)
-    n_res = res.fun.size
-    n_par = 2 * j + 2 * y.shape[1] * (j + 2)
-    s2 = 2 * res.cost / max(n_res - n_par, 1)
-    try:
-        cov = s2 * np.linalg.pinv(res.jac.T @ res.jac)
-        std = w * np.sqrt(np.maximum(np.diag(cov)[:j], 0.0))
+        cov = s2 * np.linalg.pinv(jm.T @ jm)
+        std = w * np.sqrt(np.maximum(np.diag(cov)[0::2], 0.0))
     except np.linalg.LinAlgError:
         std = np.full(j, np.inf)
-    return fd, sig, std, bool(res.success and inside)
+    return fd, sig, std, bool(inside)
 
 
 def undamped(fd_hz, sigma):
@@ -268,7 +326,8 @@ FIT_STARTS_S = (30e-3, 20e-3, 15e-3, 10e-3, 6e-3, 4e-3, 3e-3, 2e-3, 1.5e-3, 1e-3
 
 
 def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
-                 seg_s: float, min_retained: float = 1e-3, starts_s=FIT_STARTS_S,
+                 seg_s: float, effort=None, quick_start_s: float = 1.5e-3,
+                 snr_db=None, min_fit_snr_db: float = 10.0, starts_s=FIT_STARTS_S,
                  target_rel_std: float = 1e-4, width_factor: float = 3.0,
                  max_width_hz: float = 600.0):
     """Refine picked peaks by pole fits; group peaks whose fit bands overlap.
@@ -298,9 +357,11 @@ def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
         Segment length [s]; the native resolution 1/seg_s sets the narrowest band.
     starts_s : sequence of float
         Segment starts tried, latest first [s after onset].
-    min_retained : float
-        Starts where a mode's amplitude (estimated from its half-power width) has
-        decayed below this fraction are skipped: there the fit would lock onto noise.
+    snr_db : array_like, shape (p,), optional
+        Peak heights over the noise floor [dB]. A start at which a mode (decaying at the
+        rate its half-power width tells) would stand less than ``min_fit_snr_db`` above
+        the noise is skipped: there the fit would lock onto noise.
+    min_fit_snr_db : float
     target_rel_std : float
         Largest acceptable relative standard error of a refined frequency; when no
         start meets it, the latest start meeting 3, 10 times it, or the earliest.
@@ -337,16 +398,21 @@ def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
             groups[-1].append(i)
         else:
             groups.append([i])
+    effort = np.full(p, 2) if effort is None else np.asarray(effort)
     for g in groups:
         g = np.array(g)
-        if g.size > 4:  # a dense cluster of noise peaks: not worth a joint fit
+        level = int(np.max(effort[g]))
+        if g.size > 4 or level == 0:  # a dense cluster of noise peaks: not worth a joint fit
             continue
         band_lo, band_hi = float(np.min(lo[g])), float(np.max(hi[g]))
         f_start, s_start = hz[g], 2 * np.pi * hw[g]
         # The narrowest resolvable half-width is ~1/(2T): above it the width is the decay.
         s_decay = np.maximum(s_start - np.pi / seg_s, 0.0)
-        t_max = np.log(1.0 / min_retained) / max(float(np.max(s_decay)), 1e-9)
+        margin_db = 60.0 if snr_db is None else float(np.min(np.asarray(snr_db)[g])) - min_fit_snr_db
+        t_max = max(margin_db, 0.0) / (20 * np.log10(np.e)) / max(float(np.max(s_decay)), 1e-9)
         tried = [ts for ts in starts_s if ts <= t_max] or [min(starts_s)]
+        if level == 1:
+            tried = [quick_start_s]
         fits = []
         for ts in tried:
             ff, spec, ovs = fit_spectra(ts)

@@ -77,7 +77,7 @@ def spectra(segments, sample_rate: float, n_fft: int) -> tuple[np.ndarray, np.nd
 
 
 def noise_segments(mono, sample_rate: float, taps: list[Tap], n_seg: int, margin_s: float = 5e-3,
-                   max_count: int = 8) -> np.ndarray:
+                   max_count: int = 4) -> np.ndarray:
     """Up to ``max_count`` segments of ``n_seg`` samples that contain no tap ring-down.
 
     They lie before the first tap or after a tap's segment ends; the noise spectrum
