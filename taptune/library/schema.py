@@ -6,7 +6,24 @@ A library file is one JSON document::
      "holders": {NAME: ENTRY, ...}}
 
 with ``ENTRY`` as written by :meth:`HolderEntry.to_dict` (lengths in mm, moduli in GPa,
-holder parameters in library units, see :mod:`taptune.model.params`). Every read is
+holder parameters in library units, see :mod:`taptune.model.params`)::
+
+    {"name": "ER32 collet chuck HSK-A63 x 100", "interface": "HSK-A63",
+     "holder": {"name", "interface", "clamp_length", "material": {"density",
+                "youngs_modulus", "poisson", "loss_factor"}, "segments": [{"length", "od", "id"}]},
+     "params": {"k_tt", "k_rr", "eta_tt", "eta_rr", "alpha", "density_factor", "modulus_factor"},
+     "param_sets": [PARAMS, ...],                       # near-optimal sets (MODEL.md §8.6)
+     "model_options": {"h_max_mm": 2.0, ...},           # ModelOptions.to_dict()
+     "identifications": [{"recording": "tap.wav", "sha256": "<64 hex>",
+                          "tool": {"name", "total_length", "material", "segments",
+                                   optional "shank_diameter", "flute_length",
+                                   "flute_diameter", "flute_ratio"},
+                          "stickout_mm", "date": "2026-11-22T12:38:49Z", "objective",
+                          "seed": int | null, "evaluations",
+                          "bending_measured_hz": [...], "bending_model_hz": [...],
+                          "taptune_version"}, ...]}
+
+Every read is
 validated here by hand-written checks on plain JSON data: nothing is ever executed,
 imported or unpickled, and every message names the file, the holder and the key.
 Unknown keys are rejected rather than ignored, so a typo or a foreign document cannot

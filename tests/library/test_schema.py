@@ -7,10 +7,13 @@ import json
 import pickle
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from taptune.io.assembly import parse_assembly
 from taptune.library import HolderEntry, HolderLibrary, LibraryFormatError, ProvenanceRecord, tool_from_dict, tool_to_dict
 from taptune.library.schema import decode, encode, parse_library
+from taptune.model.params import HolderParams
 from tests.library.entries import REFERENCE, make_entry, make_record
 
 
@@ -181,3 +184,31 @@ def test_code_like_strings_stay_data(tmp_path):
 def test_encoding_refuses_a_non_entry():
     with pytest.raises(Exception, match="must be a HolderEntry"):
         encode({"A": copy.deepcopy(make_entry("A").to_dict())}, "<test>")
+
+
+# --------------------------------------------------------------------------- property
+
+positive = st.floats(min_value=1e-300, max_value=1e300, allow_nan=False, allow_infinity=False)
+params_strategy = st.builds(
+    HolderParams,
+    k_tt=positive,
+    k_rr=positive,
+    eta_tt=st.floats(min_value=0, max_value=1e3),
+    eta_rr=st.floats(min_value=0, max_value=1e3),
+    alpha=st.floats(min_value=-99.999, max_value=99.999),
+    density_factor=positive,
+    modulus_factor=positive,
+)
+names = st.text(st.characters(min_codepoint=32, blacklist_categories=("Cs",)), min_size=1, max_size=40).filter(str.strip)
+
+
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(names=st.lists(names, min_size=1, max_size=4, unique=True), best=params_strategy,
+       sets=st.lists(params_strategy, max_size=3))
+def test_any_valid_library_round_trips_bit_for_bit(names, best, sets):
+    base = make_entry(records=2)
+    entries = {n: HolderEntry(**{**base.__dict__, "name": n, "params": best, "param_sets": tuple(sets)}) for n in names}
+    raw = encode(entries, "<test>")
+    again = parse_library(decode(raw, "<test>"), "<test>")
+    assert again == entries
+    assert encode(again, "<test>") == raw
