@@ -85,6 +85,22 @@ def test_show_gives_parameters_with_spread_history_and_predictions(capsys, lib):
     assert f1 == pytest.approx(4783, abs=20)
 
 
+def test_show_reports_a_setup_it_cannot_predict_and_goes_on(capsys, lib):
+    from dataclasses import replace
+
+    from taptune.library import tool_to_dict
+
+    entry = lib.get(ER32)
+    fat = replace(REFERENCE.tool, name="D32 shank", segments=tuple(replace(s, od=0.032) for s in REFERENCE.tool.segments))
+    odd = replace(entry.identifications[0], tool=tool_to_dict(fat), sha256="f" * 64)
+    lib.put(replace(entry, identifications=entry.identifications + (odd,)))
+    code, out, _ = taptune(capsys, "library", "show", ER32, "--library", lib.path)
+    assert code == 0
+    assert "tool 'solid carbide end mill D16 4FL' at 53.5 mm: f1 " in out
+    line = next(l for l in out.splitlines() if "'D32 shank' at 53.5 mm:" in l)
+    assert "cannot predict" in line and "cannot fit" in line
+
+
 def test_show_json_has_entry_spread_and_predictions(capsys, lib):
     code, out, _ = taptune(capsys, "library", "show", ER32, "--library", lib.path, "--json", "-")
     data = json.loads(out)
