@@ -1,8 +1,9 @@
 """The batch engine: discovery, pairing, result names, skip-by-hash, isolation of failures.
 
 The end-to-end runs (real identifications in worker processes) use tap recordings
-synthesised from the model (reference assembly of MODEL.md §13.4, nominal holder) with a
-tiny optimiser budget: they check the machinery, not the accuracy of the fit.
+synthesised from the model (:mod:`taptune.synthetic`; reference assembly of MODEL.md
+§13.4, nominal holder) with a tiny optimiser budget: they check the machinery, not the
+accuracy of the fit.
 """
 
 from __future__ import annotations
@@ -11,7 +12,6 @@ import json
 import os
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from tests.conftest import REFERENCE_TOML
@@ -29,7 +29,6 @@ from taptune.batch import (
 )
 from taptune.errors import InputError
 
-FS = 48000
 TINY = dict(population=8, generations=2, polish_evaluations=20)
 
 
@@ -42,42 +41,23 @@ def assembly_text(holder: str = "ER32 test holder", stickout_mm: float = 53.5) -
             .replace("stickout = 53.5", f"stickout = {stickout_mm}"))
 
 
-def tap_samples(assembly, params=None, seed: int = 0, taps=(0.1, 0.6, 1.1), seconds: float = 1.6) -> np.ndarray:
-    """Three taps on the tool tip: the model's tip velocity response plus white noise at −74 dB.
-
-    The receptance is band-limited (250 Hz … 0.45·fs, tapered) so the free-free rigid-body
-    terms and the band edges do not ring; each tap response lasts 0.4 s.
-    """
-    from taptune.model import NOMINAL, build_model, tip_receptance
-
-    n = int(0.4 * FS)
-    f = np.fft.rfftfreq(n, 1 / FS)
-    band = (f > 250) & (f < 0.45 * FS)
-    h = np.zeros(len(f), complex)
-    h[band] = tip_receptance(build_model(assembly), params or NOMINAL, f[band])
-    taper = np.clip((f - 250) / 250, 0, 1) * np.clip((0.45 * FS - f) / 2000, 0, 1)
-    impulse = np.fft.irfft(h * taper * 2j * np.pi * f, n)
-    impulse /= np.abs(impulse).max()
-    x = np.zeros(int(seconds * FS))
-    for t0 in taps:
-        i = int(t0 * FS)
-        x[i:i + n] += 0.5 * impulse[: len(x) - i]
-    return x + 2e-4 * np.random.default_rng(seed).standard_normal(len(x))
-
-
 def write_case(folder: Path, stem: str, holder: str, stickout_mm: float = 53.5, seed: int = 0,
                with_toml: bool = True, suffix: str = ".wav") -> Path:
-    """A synthetic recording ``folder/stem.wav`` and (optionally) its ``stem.toml``."""
-    from taptune.io.assembly import parse_assembly
-    from taptune.io.audio import write_audio
+    """A synthetic recording ``folder/stem.wav`` of the nominal holder and (optionally) its ``stem.toml``.
 
+    96 kHz, no microphone low-pass and 60 dB SNR, so f1–f3 are all in the recording.
+    """
     import tomllib
+
+    from taptune.io.assembly import parse_assembly
+    from taptune.model import NOMINAL
+    from taptune.synthetic import write_tap_recording
 
     folder.mkdir(parents=True, exist_ok=True)
     text = assembly_text(holder, stickout_mm)
-    asm = parse_assembly(tomllib.loads(text), stem)
     wav = folder / f"{stem}{suffix}"
-    write_audio(wav, tap_samples(asm, seed=seed), FS)
+    write_tap_recording(wav, parse_assembly(tomllib.loads(text), stem), NOMINAL, seed=seed,
+                        sample_rate=96000, mic_lp_hz=None, snr_db=60.0)
     if with_toml:
         (folder / f"{stem}.toml").write_text(text)
     return wav

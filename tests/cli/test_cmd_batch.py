@@ -145,7 +145,8 @@ def test_two_batches_at_once_on_one_library_lose_nothing(tmp_path):
             write_case(tmp_path / batch, f"{batch}{i}", holder, stickout_mm=49.0 + 2 * i, seed=i)
             holders[holder] = batch
     lib = tmp_path / "shared" / "lib.json"
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
+               PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     procs = [
         subprocess.Popen(
             [sys.executable, "-m", "taptune", "batch", str(tmp_path / batch), "--out", str(tmp_path / f"out-{batch}"),

@@ -1,0 +1,91 @@
+"""Batch throughput: recordings identified per minute with --jobs 1 and --jobs 2.
+
+Writes N synthetic recordings (taptune.synthetic; reference assembly, nominal holder,
+stick-outs 45–60 mm, 8 holder names) into a temporary folder and runs
+``python -m taptune batch`` on them once per --jobs value, each with a fresh output
+folder and library. The wall time includes process start, analysis, the fits, library
+writes and summary.csv.
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_batch.py [--count 50] [--jobs 1 2]
+        [--population 64 --generations 90]
+
+On a shared machine the numbers move with the other load: repeat, and compare runs made
+at the same time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+ASSEMBLY = REPO / "recordings" / "er32_d16.toml"
+
+
+def write_recordings(folder: Path, count: int) -> None:
+    """``count`` recordings, each with its own assembly TOML (8 holder names, 6 stick-outs)."""
+    from taptune.io.assembly import assembly_to_toml, parse_assembly
+    from taptune.model import NOMINAL
+    from taptune.synthetic import write_tap_recording
+
+    text = ASSEMBLY.read_text()
+    for i in range(count):
+        holder = f"ER32 bench {i % 8}"
+        data = tomllib.loads(text)
+        data["holder"]["name"] = holder
+        data["setup"]["stickout"] = 45.0 + 3.0 * (i % 6)
+        asm = parse_assembly(data, f"r{i:03d}.toml")
+        (folder / f"r{i:03d}.toml").write_text(assembly_to_toml(asm))
+        write_tap_recording(folder / f"r{i:03d}.wav", asm, NOMINAL, seed=i, sample_rate=96000)
+
+
+def run_batch(folder: Path, work: Path, jobs: int, budget: list[str]) -> tuple[float, int, str]:
+    """(seconds, exit status, last lines of output) of one batch run."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
+    cmd = [sys.executable, "-m", "taptune", "batch", str(folder), "--out", str(work / f"out{jobs}"),
+           "--library", str(work / f"lib{jobs}.json"), "--jobs", str(jobs), *budget]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    return time.perf_counter() - t0, proc.returncode, "\n".join(proc.stdout.splitlines()[-3:])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--count", type=int, default=50)
+    ap.add_argument("--jobs", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--population", type=int, default=None, help="GA population (default: the library default)")
+    ap.add_argument("--generations", type=int, default=None, help="GA generations (default: the library default)")
+    args = ap.parse_args(argv)
+    budget = []
+    if args.population:
+        budget += ["--population", str(args.population)]
+    if args.generations:
+        budget += ["--generations", str(args.generations)]
+
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        folder = work / "recordings"
+        folder.mkdir()
+        t0 = time.perf_counter()
+        write_recordings(folder, args.count)
+        print(f"{args.count} recordings written in {time.perf_counter() - t0:.1f} s; "
+              f"budget: {' '.join(budget) or 'library defaults'}; {os.cpu_count()} CPUs\n")
+        print(f"{'jobs':>4}  {'wall [s]':>9}  {'recordings/min':>15}  {'exit':>4}")
+        for jobs in args.jobs:
+            seconds, code, tail = run_batch(folder, work, jobs, budget)
+            print(f"{jobs:>4}  {seconds:9.1f}  {60 * args.count / seconds:15.1f}  {code:>4}")
+            if code != 0:
+                print(tail)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
