@@ -438,11 +438,15 @@ def identify(
 # ----------------------------------------------------------------------------- predict
 
 
-def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3) -> Prediction:
+def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3,
+            relative_floor: float = 5e-4) -> Prediction:
     """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
 
-    The first set is the best fit and gives the values; the spread is the largest
-    deviation of any other set from it (the half-width of the band that holds them all).
+    Every set fits the measurement equally well (MODEL.md §8.6), so the prediction is the
+    centre of the band their predictions span and the spread its half-width — but never
+    less than ``relative_floor`` × f: the measured frequencies themselves are only known
+    to about 0.05 % (or to the fit's residual misfit, if larger; see
+    :func:`fit_misfit`), and no parameter set can predict better than it was measured.
     """
     from taptune.model import ModelOptions, build_model, solve_modes
 
@@ -455,10 +459,22 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         f.append(np.asarray(modes.frequency_hz[:n_modes], dtype=float))
         z.append(np.asarray(modes.damping_ratio[:n_modes], dtype=float))
     f, z = np.array(f), np.array(z)
+    f_mid, z_mid = (f.max(0) + f.min(0)) / 2, (z.max(0) + z.min(0)) / 2
+    f_half = np.maximum((f.max(0) - f.min(0)) / 2, relative_floor * f_mid)
     return Prediction(
         stickout_mm=assembly.stickout * 1e3,
-        bending_hz=tuple(map(float, f[0])),
-        bending_hz_spread=tuple(map(float, np.abs(f - f[0]).max(axis=0))),
-        damping_ratio=tuple(map(float, z[0])),
-        damping_ratio_spread=tuple(map(float, np.abs(z - z[0]).max(axis=0))),
+        bending_hz=tuple(map(float, f_mid)),
+        bending_hz_spread=tuple(map(float, f_half)),
+        damping_ratio=tuple(map(float, z_mid)),
+        damping_ratio_spread=tuple(map(float, (z.max(0) - z.min(0)) / 2)),
     )
+
+
+def fit_misfit(measured_hz, model_hz, floor: float = 5e-4) -> float:
+    """Largest relative miss of the fitted model on the measured frequencies, at least ``floor``.
+
+    Works on the pairs stored in an identification or a library provenance record (None
+    entries, modes not measured, are skipped).
+    """
+    pairs = [(m, f) for m, f in zip(measured_hz, model_hz) if m is not None and f is not None]
+    return max([floor] + [abs(f / m - 1) for m, f in pairs])

@@ -34,3 +34,31 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
     expected, bounds = model_expectation(assembly, params, model_options)
     kwargs.setdefault("interface", assembly.holder.interface)
     return analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, **kwargs)
+
+
+def identify_recordings(recordings, assemblies, options=None, progress=None, library_params=None):
+    """Analyse each recording (model-guided labels) and fit the holder jointly.
+
+    Parameters
+    ----------
+    recordings : sequence of Recording
+    assemblies : sequence of Assembly
+        One per recording, same holder.
+    options : IdentifyOptions, optional
+    progress : callable, optional
+        ``progress(fraction, message)``; returning False cancels.
+    library_params : HolderParams, optional
+        Parameters of this holder from the library, used instead of the nominal ones to
+        guide the peak labels.
+
+    Returns
+    -------
+    (list of SpectrumAnalysis, Identification)
+    """
+    from taptune.identify.core import IdentifyOptions, identify
+
+    options = options or IdentifyOptions()
+    analyses = [
+        analyse_for_assembly(r, a, library_params, options.model) for r, a in zip(recordings, assemblies)
+    ]
+    return analyses, identify(analyses, assemblies, options, progress=progress)

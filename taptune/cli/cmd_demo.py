@@ -1,0 +1,118 @@
+"""``taptune demo``: tap → holder → predictions at two other stick-outs, on bundled data.
+
+The example recordings in ``recordings/`` are synthetic (made by
+``scripts/make_recordings.py`` from the model plus workshop nuisances); each has a
+``.truth.json`` with the parameters it was made from, so the demo can show how close
+the predictions come.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+
+def add_parser(sub, name, help_text):
+    p = sub.add_parser(name, help=help_text, description=(
+        "Identify the holder of a bundled example recording, store it in a library (a temporary one "
+        "unless --library is given) and predict the same holder at two other stick-outs."))
+    p.add_argument("--recordings", metavar="DIR", help="folder with demo.json (default: the bundled recordings/)")
+    p.add_argument("--case", metavar="NAME", help="run only this example (default: the first)")
+    p.add_argument("--all", action="store_true", help="run every example")
+    p.add_argument("--library", metavar="PATH", help="keep the identified holders in this library")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", metavar="OUT", help="write the results as JSON")
+    return p
+
+
+def bundled_recordings() -> Path:
+    """The repository's recordings/ folder (next to the package)."""
+    return Path(__file__).resolve().parents[2] / "recordings"
+
+
+def load_manifest(folder: Path) -> list[dict]:
+    from taptune.errors import InputError
+
+    path = folder / "demo.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        cases = data["cases"]
+        for c in cases:
+            c["recording"], c["assembly"], c["predict_stickouts_mm"]  # noqa: B018 (presence check)
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file (the demo needs the bundled recordings; run scripts/make_recordings.py)") from None
+    except (ValueError, KeyError, TypeError) as err:
+        raise InputError(f"{path}: not a demo manifest ({err})") from None
+    return cases
+
+
+def run(args) -> int:
+    from taptune.cli.cmd_identify import run_identification
+    from taptune.cli.cmd_predict import predict_stickouts
+    from taptune.cli.common import ProgressBar, format_table, write_json
+    from taptune.errors import InputError
+    from taptune.io.assembly import load_assembly
+    from taptune.io.audio import read_audio
+    from taptune.library.record import save_identification
+    from taptune.library.store import HolderLibrary
+
+    folder = Path(args.recordings) if args.recordings else bundled_recordings()
+    cases = load_manifest(folder)
+    if args.case:
+        cases = [c for c in cases if c.get("name") == args.case]
+        if not cases:
+            raise InputError(f"{folder / 'demo.json'}: no example named {args.case!r}")
+    elif not args.all:
+        cases = cases[:1]
+
+    with tempfile.TemporaryDirectory(prefix="taptune-demo-") as tmp:
+        library_path = args.library or str(Path(tmp) / "holders.json")
+        results = []
+        for case in cases:
+            wav, toml = folder / case["recording"], folder / case["assembly"]
+            assembly = load_assembly(toml)
+            recording = read_audio(wav)
+            print(f"== {case.get('name', wav.stem)}: {case.get('description', '')}")
+            print(f"tap recording  {wav.name}  ({recording.sample_rate} Hz, {recording.samples.shape[0] / recording.sample_rate:.1f} s)")
+            print(f"assembly       {assembly.holder.name}\n               {assembly.tool.name}, stick-out {assembly.stickout * 1e3:g} mm")
+            bar = ProgressBar("identify")
+            try:
+                analyses, result = run_identification([recording], [assembly], seed=args.seed, progress=bar)
+            finally:
+                bar.close()
+            name = save_identification(library_path, result, [recording], [assembly])
+            meas, model = result.bending_measured_hz[0], result.bending_model_hz[0]
+            print(f"\nidentified in {result.seconds:.1f} s ({result.evaluations} model evaluations); "
+                  f"holder '{name}' stored in {'the library' if args.library else 'a temporary library'}")
+            print("measured  " + "  ".join("—" if m is None else f"{m:8.1f}" for m in meas) + "  Hz")
+            print("model     " + "  ".join(f"{f:8.1f}" for f in model) + "  Hz")
+            entry = HolderLibrary(library_path).get(name)
+            stickouts = [assembly.stickout * 1e3] + list(case["predict_stickouts_mm"])
+            predictions, _ = predict_stickouts(entry, assembly, stickouts)
+            truth = _truth(folder, case)
+            rows = []
+            for p in predictions:
+                row = [f"{p.stickout_mm:g}"] + [f"{f:.0f} ± {s:.0f}" for f, s in zip(p.bending_hz, p.bending_hz_spread)]
+                t = truth.get(f"{p.stickout_mm:g}")
+                row.append("  ".join(f"{x:.0f}" for x in t) if t else "—")
+                rows.append(row)
+            print("\npredicted free-free bending modes of this holder with this tool:")
+            print(format_table(rows, ["stick-out [mm]", "f1 [Hz]", "f2 [Hz]", "f3 [Hz]", "truth f1 f2 f3 [Hz] (synthetic)"]))
+            for w in result.warnings:
+                print(f"warning: {w}", file=sys.stderr)
+            print()
+            results.append({"case": case.get("name"), "identification": result.to_dict(),
+                            "predictions": [p.to_dict() for p in predictions]})
+        write_json({"results": results}, args.json)
+    return 0
+
+
+def _truth(folder: Path, case: dict) -> dict:
+    """True f1–f3 by stick-out ("53.5" → [f1, f2, f3]) from the case's truth file, if any."""
+    path = folder / case.get("truth", "")
+    if not case.get("truth") or not path.is_file():
+        return {}
+    data = json.loads(path.read_text(encoding="utf-8"))
+    return {f"{float(k):g}": v for k, v in data.get("bending_hz_by_stickout", {}).items()}

@@ -1,0 +1,133 @@
+"""``taptune identify WAV... --assembly FILE... [--library PATH] [--seed N] [--json OUT] [--plot PNG] [--no-save]``."""
+
+from __future__ import annotations
+
+import sys
+
+
+def add_parser(sub, name, help_text):
+    p = sub.add_parser(name, help=help_text, description=(
+        "Find the taps, label the bending peaks, fit the holder's contact parameters and store "
+        "the holder in the library. Several recordings of one holder (other tools or stick-outs) "
+        "are fitted jointly: give one --assembly per recording, in the same order."))
+    p.add_argument("wav", nargs="+", help="tap recording(s), WAV or FLAC")
+    p.add_argument("--assembly", action="append", required=True, metavar="FILE",
+                   help="assembly TOML (once for all recordings, or once per recording)")
+    p.add_argument("--library", metavar="PATH", help="holder library file (default: $TAPTUNE_LIBRARY or the user data folder)")
+    p.add_argument("--seed", type=int, default=0, help="random seed: the same seed gives the same result (default 0)")
+    p.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
+    p.add_argument("--plot", metavar="PNG", help="write a picture of the measured spectrum and the fit")
+    p.add_argument("--report", metavar="PDF", help="write a one-page-per-recording PDF report")
+    p.add_argument("--no-save", action="store_true", help="do not store the holder in the library")
+    p.add_argument("--jobs", type=int, default=None, help="processes for the optimiser (default: all cores)")
+    return p
+
+
+def load_inputs(wavs, assembly_files):
+    """Recordings and their assemblies (one assembly for all, or one each)."""
+    from taptune.errors import InputError
+    from taptune.io.assembly import load_assembly
+    from taptune.io.audio import read_audio
+
+    if len(assembly_files) not in (1, len(wavs)):
+        raise InputError(f"give one --assembly for all recordings or one per recording ({len(wavs)}), got {len(assembly_files)}")
+    assemblies = [load_assembly(f) for f in assembly_files]
+    if len(assemblies) == 1:
+        assemblies *= len(wavs)
+    recordings = [read_audio(w) for w in wavs]
+    return recordings, assemblies
+
+
+def run_identification(recordings, assemblies, seed=0, jobs=None, progress=None):
+    """Analyse and fit; returns (analyses, Identification)."""
+    from taptune.identify import IdentifyOptions
+    from taptune.identify.pipeline import identify_recordings
+
+    return identify_recordings(recordings, assemblies, IdentifyOptions(seed=seed, jobs=jobs), progress)
+
+
+def result_dict(recordings, assemblies, analyses, result) -> dict:
+    """CLI-CONTRACT.md JSON of an identification (lists per recording for a joint fit)."""
+    per_file = []
+    for rec, analysis in zip(recordings, analyses):
+        d = analysis.to_dict()
+        per_file.append({
+            "file": rec.path,
+            "sample_rate": rec.sample_rate,
+            "taps": d["taps"],
+            "peaks": d["peaks"],
+            "warnings": d["warnings"],
+        })
+    out = {"holder": assemblies[0].holder.name}
+    if len(per_file) == 1:
+        out.update({k: v for k, v in per_file[0].items() if k != "warnings"})
+    else:
+        out["file"] = [f["file"] for f in per_file]
+        out["recordings"] = [{k: v for k, v in f.items() if k != "warnings"} for f in per_file]
+    out.update(result.to_dict())
+    out["warnings"] = [w for f in per_file for w in f["warnings"]] + out["warnings"]
+    return out
+
+
+def print_summary(out: dict, result, stream=None) -> None:
+    from taptune.cli.common import format_table
+
+    stream = stream or sys.stdout
+    measured = result.bending_measured_hz
+    model = result.bending_model_hz
+    print(f"holder: {out['holder']}", file=stream)
+    for i, (m, f) in enumerate(zip(measured, model)):
+        rows = [[f"f{n + 1}", "—" if m[n] is None else f"{m[n]:.1f}", f"{f[n]:.1f}",
+                 "—" if m[n] is None else f"{100 * (f[n] / m[n] - 1):+.3f}"] for n in range(3)]
+        if len(measured) > 1:
+            print(f"recording {i + 1}:", file=stream)
+        print(format_table(rows, ["mode", "measured [Hz]", "model [Hz]", "error [%]"]), file=stream)
+    p = result.params
+    spread = result.param_spread
+    print(
+        f"k_tt = {p.k_tt:.3g} ± {spread['k_tt']:.2g} N/m/mm   k_rr = {p.k_rr:.3g} ± {spread['k_rr']:.2g} N·m/rad/mm\n"
+        f"eta_tt = {p.eta_tt:.3g} 1/mm   eta_rr = {p.eta_rr:.3g} 1/mm   alpha = {p.alpha:+.1f} %   "
+        f"density ×{p.density_factor:.3f}   modulus ×{p.modulus_factor:.3f}",
+        file=stream,
+    )
+    print(f"objective {result.objective:.4g}, {result.evaluations} evaluations, {result.seconds:.2f} s", file=stream)
+    for w in out["warnings"]:
+        print(f"warning: {w}", file=stream)
+
+
+def run(args) -> int:
+    from taptune.cli.common import ProgressBar, output_path, write_json
+    from taptune.identify.optimize import Cancelled
+
+    for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
+        output_path(path, what)
+    recordings, assemblies = load_inputs(args.wav, args.assembly)
+    bar = ProgressBar("identify")
+    try:
+        analyses, result = run_identification(recordings, assemblies, args.seed, args.jobs, bar)
+    except Cancelled:
+        bar.close()
+        print("taptune identify: cancelled", file=sys.stderr)
+        return 130
+    finally:
+        bar.close()
+    out = result_dict(recordings, assemblies, analyses, result)
+    if not args.no_save:
+        from taptune.library.record import save_identification
+
+        name = save_identification(args.library, result, recordings, assemblies)
+        out["library_entry"] = name
+    write_json(out, args.json)
+    if args.json != "-":
+        print_summary(out, result)
+        if not args.no_save:
+            print(f"saved holder '{out['library_entry']}' to the library")
+    if args.plot:
+        from taptune.report.fit_plot import plot_identification
+
+        plot_identification(result, analyses, args.plot, title=out["holder"])
+    if args.report:
+        from taptune.report.pdf import write_identification_report
+
+        write_identification_report(args.report, result, analyses, recordings, assemblies)
+    return 0

@@ -1,0 +1,68 @@
+"""``taptune predict ASSEMBLY --holder NAME [--stickout MM ...] [--library PATH] [--json OUT] [--plot PNG]``."""
+
+from __future__ import annotations
+
+import sys
+
+
+def add_parser(sub, name, help_text):
+    p = sub.add_parser(name, help=help_text, description=(
+        "Predict the free-free bending modes of a library holder with the assembly's tool, at the "
+        "assembly's stick-out or at each --stickout. The assembly describes the holder as clamped on "
+        "this tool (bore, collet); the contact parameters come from the library."))
+    p.add_argument("assembly", help="assembly TOML with the tool (and the holder as clamped on it)")
+    p.add_argument("--holder", required=True, metavar="NAME", help="holder name in the library")
+    p.add_argument("--stickout", type=float, nargs="+", action="extend", metavar="MM", help="stick-out(s) [mm]")
+    p.add_argument("--library", metavar="PATH", help="holder library file")
+    p.add_argument("--json", metavar="OUT", help="write the predictions as JSON ('-' for stdout)")
+    p.add_argument("--plot", metavar="PNG", help="write a picture of the predicted tip receptances")
+    return p
+
+
+def predict_stickouts(entry, assembly, stickouts_mm=None):
+    """Predictions (one per stick-out) and the assemblies they were made for."""
+    from taptune.identify import predict
+
+    assemblies = [assembly] if not stickouts_mm else [assembly.with_stickout(s * 1e-3) for s in stickouts_mm]
+    from taptune.model import ModelOptions
+
+    from taptune.identify.core import fit_misfit
+
+    options = ModelOptions.from_dict(entry.model_options)
+    floor = max([fit_misfit(r.bending_measured_hz, r.bending_model_hz) for r in entry.identifications] or [5e-4])
+    sets = entry.param_sets or (entry.params,)
+    return [predict(sets, a, options, relative_floor=floor) for a in assemblies], assemblies
+
+
+def run(args) -> int:
+    from taptune.cli.common import format_table, output_path, write_json
+    from taptune.io.assembly import load_assembly
+    from taptune.library.store import HolderLibrary, default_library_path
+
+    output_path(args.json, "JSON")
+    output_path(args.plot, "plot")
+    assembly = load_assembly(args.assembly)
+    entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
+    warnings = list(assembly.warnings)
+    if assembly.holder.name != entry.name:
+        warnings.append(
+            f"{args.assembly}: its holder is '{assembly.holder.name}', predicting with the contact of library holder '{entry.name}'"
+        )
+    predictions, assemblies = predict_stickouts(entry, assembly, args.stickout)
+    out = {"holder": entry.name, "assembly": args.assembly, "tool": assembly.tool.name,
+           "predictions": [p.to_dict() for p in predictions], "warnings": warnings}
+    write_json(out, args.json)
+    if args.json != "-":
+        rows = []
+        for p in predictions:
+            rows.append([f"{p.stickout_mm:g}"] + [f"{f:.0f} ± {s:.0f}" for f, s in zip(p.bending_hz, p.bending_hz_spread)]
+                        + [f"{100 * p.damping_ratio[0]:.2f}"])
+        print(f"holder: {entry.name}\ntool:   {assembly.tool.name}")
+        print(format_table(rows, ["stick-out [mm]", "f1 [Hz]", "f2 [Hz]", "f3 [Hz]", "ζ1 [%]"]))
+        for w in warnings:
+            print(f"warning: {w}", file=sys.stderr)
+    if args.plot:
+        from taptune.report.fit_plot import plot_predictions
+
+        plot_predictions(entry, assemblies, predictions, args.plot)
+    return 0
