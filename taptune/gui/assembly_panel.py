@@ -268,6 +268,10 @@ class AssemblyPanel(QWidget):
             for label, _ in choices[1:]:
                 combo.addItem(label)
             combo.blockSignals(False)
+        for combo, choices, table in ((self.holder_combo, self._holder_choices, self._holder),
+                                      (self.tool_combo, self._tool_choices, self._tool)):
+            if table is not None:
+                self._show_current(combo, choices, table)
 
     def _holder_picked(self, index: int) -> None:
         table = self._holder_choices[index][1] if 0 <= index < len(self._holder_choices) else None
@@ -319,6 +323,7 @@ class AssemblyPanel(QWidget):
         h = self._holder
         self._filling = True
         try:
+            self._show_current(self.holder_combo, self._holder_choices, h)
             self.holder_name.setText(str(h.get("name", "")))
             self.interface.setCurrentText(str(h.get("interface", "unknown")))
             self.clamp.setValue(float(h.get("clamp_length", 0.0)))
@@ -331,6 +336,7 @@ class AssemblyPanel(QWidget):
         stepped = "segments" in t
         self._filling = True
         try:
+            self._show_current(self.tool_combo, self._tool_choices, t)
             self.tool_name.setText(str(t.get("name", "")))
             self.total_length.setValue(float(t.get("total_length", 0.0)))
             for box, key, default in ((self.shank, "shank_diameter", 0.0), (self.flute_length, "flute_length", 0.0),
@@ -344,6 +350,16 @@ class AssemblyPanel(QWidget):
             )
         finally:
             self._filling = False
+
+    @staticmethod
+    def _show_current(combo: QComboBox, choices, table: dict) -> None:
+        """Select the list entry with this geometry, or name it in the first entry."""
+        for i, (_, candidate) in enumerate(choices):
+            if candidate is not None and candidate == table:
+                combo.setCurrentIndex(i)
+                return
+        combo.setItemText(0, f"{table.get('name', '?')} (from file or edited)")
+        combo.setCurrentIndex(0)
 
     # ------------------------------------------------------------------ editing
 

@@ -39,6 +39,22 @@ AUDIO_SUFFIXES = (".wav", ".flac")
 VIEWS = ("record", "spectrum", "fit", "predict", "library")
 
 
+def sidecar_assembly(path) -> str | None:
+    """The assembly file of a recording: same name with ``.toml``, else the file whose name starts it.
+
+    ``er32_d16_tap.wav`` finds ``er32_d16_tap.toml`` or else ``er32_d16.toml`` (the longest
+    such name wins), so several takes of one assembly can share one assembly file.
+    """
+    path = Path(path)
+    same = path.with_suffix(".toml")
+    if same.is_file():
+        return str(same)
+    stem = path.stem
+    candidates = [p for p in path.parent.glob("*.toml")
+                  if stem.startswith(p.stem) and stem[len(p.stem):len(p.stem) + 1] in ("_", "-", " ", ".")]
+    return str(max(candidates, key=lambda p: len(p.stem))) if candidates else None
+
+
 def analyse_file(path: str, assembly):
     """Read a recording and analyse it, guided by ``assembly`` when there is one (worker thread).
 
@@ -180,6 +196,7 @@ class MainWindow(QMainWindow):
         self.predictor.failed.connect(lambda m: self.statusBar().showMessage(f"Prediction: {m}", 8000))
         self.assembly_panel.reload_choices(self.library_view.entries)
         self._update_actions()
+        self.progress.setVisible(False)
         self.statusBar().showMessage("Choose the holder and tool, then record or open a recording.")
 
     # ------------------------------------------------------------------ helpers
@@ -217,16 +234,15 @@ class MainWindow(QMainWindow):
     def load_recording(self, path: str, assembly_path: str | None = None) -> None:
         """Read and analyse a recording in the background.
 
-        The assembly comes from ``assembly_path``, else from an assembly file with the
-        same name beside the recording, else from the panel as it is.
+        The assembly comes from ``assembly_path``, else from the assembly file beside the
+        recording (:func:`sidecar_assembly`), else from the panel as it is.
         """
         from taptune.errors import InputError
 
         if self._identify_task is not None:
             show_error(self, "Busy", "Wait for the identification to end (or cancel it) before opening a recording.")
             return
-        sidecar = Path(path).with_suffix(".toml")
-        toml_path = assembly_path or (str(sidecar) if sidecar.is_file() else None)
+        toml_path = assembly_path or sidecar_assembly(path)
         if toml_path:
             try:
                 self.assembly_panel.load_file(toml_path)
@@ -317,6 +333,8 @@ class MainWindow(QMainWindow):
             self._set_progress(None, "cancelling")
 
     def _set_progress(self, fraction, message: str) -> None:
+        # Shown only while something runs: an idle empty bar looks like an input field.
+        self.progress.setVisible(bool(message) and message not in ("done",) or self.busy)
         if fraction is None:
             self.progress.setRange(0, 0)  # busy indicator
         else:

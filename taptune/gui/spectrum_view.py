@@ -46,6 +46,27 @@ def relabel(analysis, index: int, kind: str, mode: int | None):
     return dataclasses.replace(analysis, peaks=peaks)
 
 
+# Points drawn per curve: about one per screen pixel column of a wide window.
+DISPLAY_POINTS = 2500
+
+
+def peak_hold(freq, values, points: int = DISPLAY_POINTS):
+    """Thin a long spectrum for drawing, keeping the maximum of each group of bins.
+
+    A 1 Hz grid up to 24 kHz has 24 000 bins; drawn as is, the noise between peaks
+    becomes a solid band. The group maxima keep every peak at its true height.
+    Returns (freq, values) of the group maxima.
+    """
+    freq, values = np.asarray(freq), np.asarray(values)
+    k = int(np.ceil(values.size / points))
+    if k <= 1:
+        return freq, values
+    n = (values.size // k) * k
+    groups = values[:n].reshape(-1, k)
+    idx = np.argmax(groups, axis=1) + np.arange(groups.shape[0]) * k
+    return freq[idx], values[idx]
+
+
 def _db(magnitude, reference) -> np.ndarray:
     return 20.0 * np.log10(np.maximum(np.asarray(magnitude, dtype=float), 1e-300) / reference)
 
@@ -100,8 +121,10 @@ class SpectrumView(QWidget):
         f_khz = np.asarray(a.freq_hz) / 1e3
         ref = float(np.max(a.magnitude)) if np.size(a.magnitude) else 1.0
         for k, mag in enumerate(np.atleast_2d(a.tap_magnitudes) if np.size(a.tap_magnitudes) else ()):
-            ax.plot(f_khz, _db(mag, ref), color=TAPS, lw=0.6, label="single taps" if k == 0 else None, zorder=1)
-        ax.plot(f_khz, _db(a.magnitude, ref), color=MEASURED, lw=1.0, label="average of taps", zorder=2)
+            ax.plot(*peak_hold(f_khz, _db(mag, ref)), color=TAPS, lw=0.6, label="single taps" if k == 0 else None,
+                    zorder=1)
+        f_shown, db_shown = peak_hold(f_khz, _db(a.magnitude, ref))
+        ax.plot(f_shown, db_shown, color=MEASURED, lw=1.0, label="average of taps", zorder=2)
         for k, (lo, hi) in enumerate(a.excluded_bands_hz or ()):
             ax.axvspan(lo / 1e3, hi / 1e3, color=BAND, alpha=0.6, lw=0, zorder=0,
                        label="interface local-mode band" if k == 0 else None)
@@ -129,7 +152,7 @@ class SpectrumView(QWidget):
             y_top = max(y_top, y + 12)
         self._peak_xy = np.array(xy) if xy else np.zeros((0, 2))
         ax.set_xlim(0, f_khz[-1] if f_khz.size else 1)
-        lowest = float(np.percentile(_db(a.magnitude, ref), 2)) if np.size(a.magnitude) else -80
+        lowest = float(np.percentile(db_shown, 5)) if db_shown.size else -80
         ax.set_ylim(max(lowest - 5, -120), y_top)
         ax.set_xlabel("frequency [kHz]")
         ax.set_ylabel("level [dB re loudest peak]")

@@ -69,6 +69,14 @@ class TaskWorker(QObject):
 
     @Slot()
     def run(self) -> None:
+        try:
+            self._run()
+        finally:
+            # End the thread from inside: the GUI thread may be blocked waiting for it
+            # (window closing) and cannot deliver the queued quit.
+            QThread.currentThread().quit()
+
+    def _run(self) -> None:
         kwargs = dict(self._kwargs)
         if self._with_progress:
             kwargs["progress"] = self._report
