@@ -30,6 +30,30 @@ def application():
     return app
 
 
+def install_excepthook(window) -> None:
+    """Show an error that escaped a Qt callback as a message instead of losing it on stderr.
+
+    The session (recording, assembly, library) is untouched by such an error, so the
+    user can go on; the traceback goes to the log for a bug report.
+    """
+    import logging
+    import traceback
+
+    from taptune.gui.messages import show_error
+    from taptune.gui.workers import describe_error
+
+    log = logging.getLogger("taptune.gui")
+
+    def hook(exc_type, exc, tb):
+        if issubclass(exc_type, KeyboardInterrupt):
+            sys.__excepthook__(exc_type, exc, tb)
+            return
+        log.error("unexpected error in the window:\n%s", "".join(traceback.format_exception(exc_type, exc, tb)))
+        show_error(window, "Something went wrong", f"{describe_error(exc)}\nYour recording, assembly and library are unchanged.")
+
+    sys.excepthook = hook
+
+
 def wait_for(signal, timeout_s: float):
     """Run the event loop until ``signal`` fires (or the timeout); returns its arguments or None."""
     from PySide6.QtCore import QEventLoop, QTimer
@@ -72,6 +96,15 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     from taptune.library import default_library_path
 
     window = MainWindow(default_library_path(library))
+    previous_hook = sys.excepthook
+    install_excepthook(window)
+    try:
+        return _show(app, window, wav, assembly, screenshot, size, view, identify)
+    finally:
+        sys.excepthook = previous_hook
+
+
+def _show(app, window, wav, assembly, screenshot, size, view, identify) -> int:
     window.resize(*size)
     if assembly:
         window.assembly_panel.load_file(assembly)

@@ -132,6 +132,7 @@ class MainWindow(QMainWindow):
                           "or drop a WAV/FLAC file onto the window. An assembly file with the "
                           "same name beside it is loaded too.")
         open_box.setWordWrap(True)
+        open_box.setMaximumWidth(760)
         rl.addWidget(open_box)
         rl.addStretch(1)
 

@@ -131,6 +131,7 @@ class RecorderPanel(QWidget):
         self.taps = QSpinBox()
         self.taps.setRange(1, 50)
         self.taps.setValue(5)
+        self.taps.setMaximumWidth(90)
         self.folder = QLineEdit(str(Path.cwd() / "recordings"))
         browse = QPushButton("Browse…")
         browse.clicked.connect(self._browse)
@@ -185,6 +186,8 @@ class RecorderPanel(QWidget):
         layout.addWidget(self.state)
         layout.addWidget(self.help)
         layout.addStretch(1)
+        # A form stretched over a 1920 px window is hard to read: keep it laptop-wide.
+        box.setMaximumWidth(760)
         outer = QVBoxLayout(self)
         outer.setContentsMargins(0, 0, 0, 0)
         outer.addWidget(box)

@@ -112,3 +112,18 @@ def test_gui_bad_input_is_one_line_exit_2(tmp_path, capsys):
     assert main(["gui", str(tmp_path / "missing.wav"), "--screenshot", str(tmp_path / "x.png")]) == 2
     assert "missing.wav: no such file" in capsys.readouterr().err
     assert main(["gui", "--size", "big", "--screenshot", str(tmp_path / "x.png")]) == 2
+
+
+def test_an_error_escaping_a_callback_becomes_a_message(window):
+    import sys
+
+    from taptune.gui.app import install_excepthook
+
+    previous = sys.excepthook
+    install_excepthook(window)
+    try:
+        sys.excepthook(ValueError, ValueError("bad value"), None)
+    finally:
+        sys.excepthook = previous
+    title, text = messages.history[-1]
+    assert title == "Something went wrong" and "ValueError: bad value" in text and "unchanged" in text
