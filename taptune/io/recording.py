@@ -378,8 +378,8 @@ class FakeInputStream:
     """A stand-in for ``sounddevice.InputStream`` that plays given samples into the callback.
 
     A feeder thread calls ``callback(block, frames, time_info, status)`` for each block
-    of ``samples`` as fast as the consumer allows (no real-time pacing: tests stay
-    fast). After the last block it either stays open and silent (``end="idle"``, like a
+    of ``samples``, as fast as it can (tests stay fast) or, with ``realtime_rate``
+    [Hz], at the pace of a real device (demonstrations). After the last block it either stays open and silent (``end="idle"``, like a
     quiet room) or goes inactive (``end="lost"``, like an unplugged device).
 
     Parameters
@@ -389,14 +389,18 @@ class FakeInputStream:
     end : {"idle", "lost"}
     callback : callable
         The sounddevice-style callback.
+    realtime_rate : float, optional
+        Deliver the blocks at this sample rate [Hz] instead of at once.
     """
 
-    def __init__(self, samples, *, blocksize: int = 1024, end: str = "idle", callback=None, **_ignored):
+    def __init__(self, samples, *, blocksize: int = 1024, end: str = "idle", callback=None,
+                 realtime_rate: float | None = None, **_ignored):
         samples = np.asarray(samples, dtype=np.float32)
         self.samples = samples[:, None] if samples.ndim == 1 else samples
         self.blocksize = int(blocksize)
         self.end = end
         self.callback = callback
+        self.realtime_rate = realtime_rate
         self.active = False
         self.closed = False
         self._stop = threading.Event()
@@ -420,6 +424,8 @@ class FakeInputStream:
                 return
             block = self.samples[start:start + self.blocksize]
             self.callback(block, block.shape[0], None, _NoStatus())
+            if self.realtime_rate:
+                self._stop.wait(block.shape[0] / self.realtime_rate)
         if self.end == "lost":
             self.active = False
 
