@@ -22,6 +22,7 @@ def add_parser(sub, name: str, help_text: str) -> None:
     p.add_argument("wav", nargs="?", metavar="WAV", help="recording to open and analyse")
     p.add_argument("--assembly", metavar="FILE", help="assembly file (default: the .toml beside the WAV)")
     p.add_argument("--library", metavar="PATH", help="holder library file")
+    p.add_argument("--holder", metavar="NAME", help="open the predictor with this library holder (and the assembly's tool)")
     p.add_argument("--screenshot", metavar="PNG", help="save a picture of the window to PNG and exit")
     p.add_argument("--size", type=_size, default=(1366, 768), metavar="WxH",
                    help="window size in pixels (default 1366x768)")
@@ -40,6 +41,12 @@ def run(args) -> int:
         load_assembly(args.assembly)  # a bad file is a one-line error before any window opens
     if (args.view or args.identify) and not args.screenshot:
         raise InputError("--view and --identify only apply with --screenshot")
+    holder = None
+    if args.holder:
+        from taptune.library import HolderLibrary, default_library_path
+
+        holder = HolderLibrary(default_library_path(args.library)).get(args.holder)  # unknown: one line, exit 2
     from taptune.gui.app import run as run_app
 
-    return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify)
+    return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify,
+                   holder)

@@ -85,8 +85,10 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
 
 def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
-        identify: bool = False) -> int:
+        identify: bool = False, holder=None) -> int:
     """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
+
+    ``holder`` (a library entry) opens the predictor with it and the assembly's tool.
 
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
@@ -99,16 +101,18 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     previous_hook = sys.excepthook
     install_excepthook(window)
     try:
-        return _show(app, window, wav, assembly, screenshot, size, view, identify)
+        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder)
     finally:
         sys.excepthook = previous_hook
 
 
-def _show(app, window, wav, assembly, screenshot, size, view, identify) -> int:
+def _show(app, window, wav, assembly, screenshot, size, view, identify, holder) -> int:
     window.resize(*size)
     if assembly:
         window.assembly_panel.load_file(assembly)
     window.show()
+    if holder is not None:
+        window.use_library_entry(holder)
     status = 0
     if wav:
         window.load_recording(str(wav), assembly)

@@ -15,7 +15,7 @@ import numpy as np
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QTableWidgetItem, QVBoxLayout, QWidget
 
-from taptune.gui.layout import column, hsplit, read_only_table
+from taptune.gui.layout import read_only_table
 from taptune.gui.plotting import BENDING, MEASURED, PlotCanvas
 from taptune.gui.workers import TaskRunner
 
@@ -90,8 +90,9 @@ class Predictor(QWidget):
         row.addWidget(self.slider, 1)
         row.addWidget(self.spin)
 
-        self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ %"])
-        self.table.setMaximumHeight(4 * 24 + 6)
+        self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ % (± spread)"])
+        self.table.setFixedHeight(4 * 23 + 4)
+        self.table.setMinimumWidth(420)
         self.note = QLabel(
             "The spread is the half-width of the band that holds the predictions of every "
             "near-optimal fit: the tap cannot tell those fits apart."
@@ -99,13 +100,18 @@ class Predictor(QWidget):
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #555555;")
         self.canvas = PlotCanvas(self)
-        split = hsplit(column(self.table, self.note, 1), self.canvas, (2, 3))
+        # Numbers on top, the curve below: the table keeps its columns readable on a
+        # 1366 px laptop and the plot gets the full width.
+        numbers = QHBoxLayout()
+        numbers.addWidget(self.table)
+        numbers.addWidget(self.note, 1)
 
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.source_label)
         layout.addLayout(row)
-        layout.addWidget(split, 1)
+        layout.addLayout(numbers)
+        layout.addWidget(self.canvas, 1)
         self.set_source(None)
 
     def set_source(self, source: PredictorSource | None) -> None:
@@ -190,17 +196,21 @@ class Predictor(QWidget):
         fig.clear()
         with self.canvas.styled():
             ax = fig.add_subplot(111)
-            ax.semilogy(FREQ_HZ / 1e3, np.abs(h), color=MEASURED, lw=1.2, label="tip receptance |H|, best fit")
+            mag = np.abs(h)
+            ax.semilogy(FREQ_HZ / 1e3, mag, color=MEASURED, lw=1.2)
             for n, (f, s) in enumerate(zip(prediction.bending_hz, prediction.bending_hz_spread)):
                 ax.axvspan((f - s) / 1e3, (f + s) / 1e3, color=BENDING, alpha=0.25, lw=0)
                 ax.axvline(f / 1e3, color=BENDING, lw=0.8, ls=":")
                 ax.annotate(f"f{n + 1}", (f / 1e3, 1.0), xycoords=("data", "axes fraction"), xytext=(3, -12),
                             textcoords="offset points", color=BENDING, fontsize=9, fontweight="bold")
             ax.set_xlim(0, FREQ_HZ[-1] / 1e3)
+            # Scale to the elastic modes, not to the rigid-body mass line near 0 Hz.
+            elastic = mag[FREQ_HZ > 0.5 * prediction.bending_hz[0]]
+            ax.set_ylim(0.5 * elastic.min(), 4 * elastic.max())
             ax.set_xlabel("frequency [kHz]")
             ax.set_ylabel("|H| [m/N]")
-            ax.set_title(f"Free-free tip receptance at stick-out {stickout_mm:.1f} mm", loc="left")
-            ax.legend(loc="upper right", framealpha=0.9)
+            ax.set_title(f"Free-free tip receptance at stick-out {stickout_mm:.1f} mm (best-fit parameters; "
+                         "bands: f1–f3 ± spread)", loc="left")
         self.canvas.draw_idle()
         self.predicted.emit(prediction)
 
