@@ -112,6 +112,21 @@ def test_gui_bad_input_is_one_line_exit_2(tmp_path, capsys):
     assert main(["gui", str(tmp_path / "missing.wav"), "--screenshot", str(tmp_path / "x.png")]) == 2
     assert "missing.wav: no such file" in capsys.readouterr().err
     assert main(["gui", "--size", "big", "--screenshot", str(tmp_path / "x.png")]) == 2
+    assert main(["gui", "--holder", "ER99", "--library", str(tmp_path / "empty.json")]) == 2
+    assert "no holder 'ER99' in the library; the library is empty" in capsys.readouterr().err
+
+
+def test_screenshot_of_the_predictor_for_a_library_holder(tmp_path, reference_toml, reference_assembly):
+    from taptune.cli import main
+    from taptune.library import HolderEntry, HolderLibrary
+    from taptune.model.params import NOMINAL
+
+    library = tmp_path / "lib.json"
+    HolderLibrary(library).put(HolderEntry.create(reference_assembly.holder, NOMINAL))
+    png = tmp_path / "predict.png"
+    assert main(["gui", "--assembly", str(reference_toml), "--holder", reference_assembly.holder.name,
+                 "--library", str(library), "--view", "predict", "--screenshot", str(png), "--size", "1920x1080"]) == 0
+    assert QImage(str(png)).width() == 1920
 
 
 def test_an_error_escaping_a_callback_becomes_a_message(window):
