@@ -75,7 +75,8 @@ def _date(iso: str | None) -> str:
 
 
 def _hz(values) -> str:
-    return " ".join(f"{f:.1f}" for f in values) or "-"
+    """Frequencies to 0.1 Hz, ``-`` for a mode that was not measured."""
+    return " ".join("-" if f is None else f"{f:.1f}" for f in values) or "-"
 
 
 # --------------------------------------------------------------------------- actions

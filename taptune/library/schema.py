@@ -20,7 +20,7 @@ holder parameters in library units, see :mod:`taptune.model.params`)::
                                    "flute_diameter", "flute_ratio"},
                           "stickout_mm", "date": "2026-11-22T12:38:49Z", "objective",
                           "seed": int | null, "evaluations",
-                          "bending_measured_hz": [...], "bending_model_hz": [...],
+                          "bending_measured_hz": [f1, null, f3], "bending_model_hz": [...],
                           "taptune_version"}, ...]}
 
 Every read is
@@ -141,10 +141,15 @@ def _text(value, src: str, key: str, max_len: int = 1000) -> str:
     return value
 
 
-def _numbers(value, src: str, key: str) -> tuple[float, ...]:
+def _frequencies(value, src: str, key: str) -> tuple[float | None, ...]:
+    """Bending frequencies f1, f2, … [Hz]: numbers > 0, or null for a mode not measured."""
     if not isinstance(value, list):
-        _fail(src, key, f"must be a list of numbers, got {_kind(value)}")
-    return tuple(_number(v, src, f"{key}[{i}]") for i, v in enumerate(value))
+        _fail(src, key, f"must be a list of frequencies (numbers or null), got {_kind(value)}")
+    return tuple(None if v is None else _number(v, src, f"{key}[{i}]", 0.0) for i, v in enumerate(value))
+
+
+def _as_frequencies(values) -> tuple[float | None, ...]:
+    return tuple(None if f is None else float(f) for f in values)
 
 
 def _plain(value, src: str, key: str, depth: int = 0):
@@ -344,8 +349,9 @@ class ProvenanceRecord:
         Optimiser seed (None if the run was not seeded).
     evaluations : int
         Model evaluations the optimiser used.
-    bending_measured_hz, bending_model_hz : tuple of float
-        Measured and fitted bending frequencies f1… [Hz].
+    bending_measured_hz, bending_model_hz : tuple of float or None
+        Measured and fitted bending frequencies f1, f2, … [Hz]; position n is mode n + 1,
+        None where that mode was not measured.
     taptune_version : str
         Version of taptune that ran the identification.
     """
@@ -358,14 +364,14 @@ class ProvenanceRecord:
     objective: float
     seed: int | None
     evaluations: int
-    bending_measured_hz: tuple[float, ...]
-    bending_model_hz: tuple[float, ...]
+    bending_measured_hz: tuple[float | None, ...]
+    bending_model_hz: tuple[float | None, ...]
     taptune_version: str
 
     def __post_init__(self):
         # Lists from callers become tuples so records compare and hash like values.
-        object.__setattr__(self, "bending_measured_hz", tuple(float(f) for f in self.bending_measured_hz))
-        object.__setattr__(self, "bending_model_hz", tuple(float(f) for f in self.bending_model_hz))
+        object.__setattr__(self, "bending_measured_hz", _as_frequencies(self.bending_measured_hz))
+        object.__setattr__(self, "bending_model_hz", _as_frequencies(self.bending_model_hz))
 
     @property
     def tool_name(self) -> str:
@@ -434,8 +440,8 @@ class ProvenanceRecord:
             objective=_number(d["objective"], source, f"{key}.objective", 0.0, lo_open=False),
             seed=None if seed is None else _integer(seed, source, f"{key}.seed"),
             evaluations=_integer(d["evaluations"], source, f"{key}.evaluations"),
-            bending_measured_hz=_numbers(d["bending_measured_hz"], source, f"{key}.bending_measured_hz"),
-            bending_model_hz=_numbers(d["bending_model_hz"], source, f"{key}.bending_model_hz"),
+            bending_measured_hz=_frequencies(d["bending_measured_hz"], source, f"{key}.bending_measured_hz"),
+            bending_model_hz=_frequencies(d["bending_model_hz"], source, f"{key}.bending_model_hz"),
             taptune_version=_text(d["taptune_version"], source, f"{key}.taptune_version", 64),
         )
 

@@ -79,7 +79,7 @@ def test_show_gives_parameters_with_spread_history_and_predictions(capsys, lib):
     assert code == 0, err
     assert "k_tt" in out and "2.81e+09 ± 2.1e+08" in out  # half-width of 0.95…1.1 × 2.81e9
     assert "tap0.wav" in out and "tap1.wav" in out and "identifications (2)" in out
-    # Reference assembly at 53.5 mm, nominal contact with alpha -6.5 %: f1 ≈ 4783 Hz.
+    # Reference assembly at 53.5 mm, nominal contact with alpha -6.5 %: f1 ≈ 4780 Hz (band centre).
     line = next(l for l in out.splitlines() if "at 53.5 mm:" in l)
     f1 = float(line.split("f1 ")[1].split(" ±")[0])
     assert f1 == pytest.approx(4783, abs=20)

@@ -49,6 +49,12 @@ def test_entry_rebuilds_the_identified_assembly():
     assert entry.holder_geometry() == REFERENCE.holder
 
 
+def test_a_mode_not_measured_keeps_its_place():
+    record = ProvenanceRecord(**{**make_record().__dict__, "bending_measured_hz": [3050.0, None, 12990.25]})
+    again = ProvenanceRecord.from_dict(json.loads(json.dumps(record.to_dict())), "<test>")
+    assert again == record and again.bending_measured_hz == (3050.0, None, 12990.25)
+
+
 def test_spread_is_the_half_width_over_best_and_near_optimal_sets():
     entry = make_entry()
     spread = entry.spread()
@@ -102,7 +108,8 @@ def mutate(path: tuple, value):
         (mutate(("identifications", 0, "date"), "2026-11-22T12:00:00+01:00"), "identifications[0].date", "UTC"),
         (mutate(("identifications", 0, "seed"), 1.5), "identifications[0].seed", "integer"),
         (mutate(("identifications", 0, "tool", "segments"), []), "identifications[0].tool.segments", "non-empty"),
-        (mutate(("identifications", 0, "bending_measured_hz"), "3 kHz"), "bending_measured_hz", "list of numbers"),
+        (mutate(("identifications", 0, "bending_measured_hz"), "3 kHz"), "bending_measured_hz", "list of frequencies"),
+        (mutate(("identifications", 0, "bending_model_hz"), [3000.0, -1.0]), "bending_model_hz[1]", "> 0"),
         (mutate(("model_options",), [1, 2]), "model_options", "JSON object"),
         (mutate(("__class__",), "os.system"), "__class__", "not a known key"),
         (mutate(("name",), "other"), "name", "differs from its key"),
