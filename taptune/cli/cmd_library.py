@@ -158,7 +158,7 @@ def _show_lines(lib, entry, predictions) -> list[str]:
             f"f measured [Hz] {_hz(r.bending_measured_hz)}, model {_hz(r.bending_model_hz)}"
         )
     if predictions is not None:
-        lines.append("predicted bending modes with the stored parameters (± spread over the near-optimal sets)")
+        lines.append("predicted bending modes (± half-width of the band of the near-optimal sets, as taptune predict)")
         if not predictions:
             lines.append("  (no identification records: no tool to predict with)")
         for p in predictions:
