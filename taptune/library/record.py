@@ -16,7 +16,6 @@ def entry_from_identification(result, recordings, assemblies, model_options=None
     options = model_options or ModelOptions()
     records = []
     for rec, asm, measured, model in zip(recordings, assemblies, result.bending_measured_hz, result.bending_model_hz):
-        found = [n for n, f in enumerate(measured) if f is not None]
         records.append(
             ProvenanceRecord.from_recording(
                 rec.path,
@@ -25,8 +24,9 @@ def entry_from_identification(result, recordings, assemblies, model_options=None
                 objective=result.objective,
                 seed=result.seed,
                 evaluations=result.evaluations,
-                bending_measured_hz=[measured[n] for n in found],
-                bending_model_hz=[model[n] for n in found],
+                # Position = mode number; None where a mode was not measured.
+                bending_measured_hz=list(measured),
+                bending_model_hz=list(model),
             )
         )
     return HolderEntry.create(
