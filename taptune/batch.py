@@ -390,8 +390,13 @@ def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: st
     Raises
     ------
     InputError
-        No recording found at all, or a library file that does not validate.
+        No recording found at all, an ``assembly`` file that cannot be used, or a
+        library file that does not validate.
     """
+    if assembly is not None:
+        from taptune.io.assembly import load_assembly
+
+        load_assembly(assembly)  # a bad --assembly concerns every file: bad input up front, exit 2
     files, rows = discover(paths)
     if not files and not rows:
         raise InputError(f"no .wav or .flac recording under {', '.join(map(str, paths))}")

@@ -130,6 +130,14 @@ def test_bad_options_exit_2_with_one_line(tmp_path, capsys, args, message):
     assert message in err and err.count("\n") == 1
 
 
+def test_a_bad_assembly_option_is_bad_input_before_any_work(tmp_path, capsys):
+    (tmp_path / "x.wav").write_bytes(b"x")
+    code, _, err = run_cli([tmp_path, "--assembly", tmp_path / "missing.toml", "--out", tmp_path / "out"], capsys)
+    assert (code, err.count("\n")) == (2, 1)
+    assert "missing.toml" in err
+    assert not (tmp_path / "out" / "summary.csv").exists()
+
+
 def test_nothing_to_do_is_bad_input(tmp_path, capsys):
     code, _, err = run_cli([tmp_path, "--out", tmp_path / "out"], capsys)
     assert (code, err.count("\n")) == (2, 1)
