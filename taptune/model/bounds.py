@@ -18,7 +18,7 @@ import itertools
 import numpy as np
 
 from taptune.io.assembly import Assembly
-from taptune.model.fe import build_model, rigid_contact_model
+from taptune.model.fe import build_model, rigid_contact_model, stiffest_holder
 from taptune.model.modes import solve_modes
 from taptune.model.options import ModelOptions
 from taptune.model.params import P_LOWER, P_UPPER, HolderParams
@@ -26,14 +26,6 @@ from taptune.model.params import P_LOWER, P_UPPER, HolderParams
 # Relative padding of the approximate lower bound.
 LOWER_PAD = 0.01
 N_BENDING = 3
-
-
-def upper_params() -> HolderParams:
-    """Holder factors of the stiffest, lightest holder; the contact is tied (values unused)."""
-    return HolderParams(
-        k_tt=10.0 ** P_UPPER[0], k_rr=10.0 ** P_UPPER[1], eta_tt=0.0, eta_rr=0.0,
-        alpha=0.0, density_factor=P_LOWER[5], modulus_factor=P_UPPER[6],
-    )
 
 
 def soft_corner_params() -> list[HolderParams]:
@@ -67,6 +59,6 @@ def bending_bounds(assembly: Assembly, options: ModelOptions = ModelOptions(), f
         Row n: (lower, upper) for bending mode n + 1 [Hz].
     """
     fe = build_model(assembly, options) if fe is None else fe
-    upper = solve_modes(rigid_contact_model(fe), upper_params(), N_BENDING).frequency_hz
+    upper = solve_modes(rigid_contact_model(fe), stiffest_holder(), N_BENDING).frequency_hz
     lower = np.min([solve_modes(fe, p, N_BENDING).frequency_hz for p in soft_corner_params()], axis=0)
     return np.stack([lower * (1 - LOWER_PAD), upper], axis=1)

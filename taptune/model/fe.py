@@ -13,7 +13,7 @@ per node; the tool-tip w DOF is the second-to-last.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -23,7 +23,7 @@ from taptune.io.assembly import Assembly
 from taptune.model.contact import contact_blocks
 from taptune.model.mesh import Mesh, build_mesh
 from taptune.model.options import ModelOptions
-from taptune.model.params import HolderParams
+from taptune.model.params import P_LOWER, P_UPPER, HolderParams
 
 
 def scatter(blocks, dofs, n_dofs) -> sp.csr_matrix:
@@ -272,8 +272,41 @@ def build_model(assembly: Assembly, options: ModelOptions = ModelOptions()) -> F
     Returns
     -------
     FEModel
+
+    Notes
+    -----
+    Two passes: the first mesh gives the highest third bending frequency reachable in
+    the search space (tied contact, stiffest and lightest holder); the final mesh also
+    resolves the bending wavelength at that frequency (``elements_per_wavelength``).
+    The first pass never splits elements, so ``mesh_scale = 0.5`` halves exactly the
+    elements of the default mesh.
     """
-    return assemble(build_mesh(assembly, options), options)
+    base = replace(options, mesh_scale=max(1.0, options.mesh_scale))
+    fe = assemble(build_mesh(assembly, base), base)
+    if options.elements_per_wavelength > 0:
+        f_max = highest_bending_hz(fe)
+        fe = assemble(build_mesh(assembly, options, f_max), options)
+    elif options != base:
+        fe = assemble(build_mesh(assembly, options), options)
+    return fe
+
+
+def stiffest_holder() -> HolderParams:
+    """Holder factors of the stiffest, lightest holder of the search space (MODEL.md §8.1).
+
+    The contact values are the stiffest too; with tied contact they do not matter.
+    """
+    return HolderParams(
+        k_tt=10.0 ** P_UPPER[0], k_rr=10.0 ** P_UPPER[1], eta_tt=0.0, eta_rr=0.0,
+        alpha=0.0, density_factor=float(P_LOWER[5]), modulus_factor=float(P_UPPER[6]),
+    )
+
+
+def highest_bending_hz(fe: "FEModel", mode: int = 3) -> float:
+    """Upper bound of bending mode ``mode`` over the search space [Hz] (MODEL.md §7.6)."""
+    from taptune.model.modes import solve_modes  # modes builds on this module
+
+    return float(solve_modes(rigid_contact_model(fe), stiffest_holder(), mode).frequency_hz[mode - 1])
 
 
 def assemble(mesh: Mesh, options: ModelOptions = ModelOptions()) -> FEModel:

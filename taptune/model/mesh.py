@@ -2,9 +2,12 @@
 
 Breakpoints follow the binding rules of MODEL.md §2, so holder and tool have nodes at
 exactly the same z inside the contact zone. On top of them, grading points are placed
-around both ends of the contact zone (0.25 mm elements growing geometrically away from
+around both ends of the contact zone (short elements growing geometrically away from
 each end): the stiff contact layer loads both beams in a boundary layer a few mm long
-there, and uniform meshes would need ≈1 mm elements everywhere to converge (§5.3).
+there, and uniform meshes would need ≈1 mm elements everywhere to converge (§5.3). The
+first element follows the shortest boundary layer of the search space (slender tools
+need it shorter), and every element resolves the bending wavelength at the highest
+reachable third bending frequency (stubby sections). Sizes: see ``ModelOptions``.
 """
 
 from __future__ import annotations
@@ -96,15 +99,19 @@ def grading_points(z_end, direction, limit, h_min, growth, h_cap, drop_near=()):
     return out
 
 
-def subdivide(breakpoints, zone, h_zone, h_out) -> np.ndarray:
+def subdivide(breakpoints, cap_of) -> np.ndarray:
     """Nodes: every interval split into equal elements no longer than its cap (§2 rule 3) [m].
 
-    Intervals inside ``zone`` = (z_c0, L_h) use ``h_zone``, the others ``h_out``.
+    Parameters
+    ----------
+    breakpoints : array_like, shape (m,)
+        Sorted breakpoints [m].
+    cap_of : callable
+        (a, b) arrays of interval ends → largest element length per interval [m].
     """
     bp = np.asarray(breakpoints, dtype=float)
     a, b = bp[:-1], bp[1:]
-    inside = (a >= zone[0] - MERGE_TOL) & (b <= zone[1] + MERGE_TOL)
-    cap = np.where(inside, h_zone, h_out)
+    cap = cap_of(a, b)
     n = np.maximum(1, np.ceil((b - a) / cap - 1e-9)).astype(int)
     nodes = [a[i] + (b[i] - a[i]) * np.arange(n[i]) / n[i] for i in range(len(a))]
     nodes.append(bp[-1:])
@@ -145,6 +152,42 @@ def boundary_layer_length(assembly: Assembly, shear: str = "hutchinson") -> floa
     return float(min(lengths))
 
 
+def bending_wavelength(segments, material, freq_hz: float, shear: str = "hutchinson") -> np.ndarray:
+    """Wavelength of free bending waves at ``freq_hz`` in each segment (Timoshenko) [m], (n,).
+
+    From the dispersion relation EI k⁴ − ω²ρI (1 + E/κG) k² − ω²ρA + ω⁴ρ²I/κG = 0
+    (the propagating root): shear and rotary inertia shorten the wave, which matters for
+    the stubby holder sections at the third bending frequency.
+    """
+    od = np.array([s.od for s in segments])
+    id_ = np.array([s.id for s in segments])
+    area, inertia = section_properties(od, id_)
+    kappa = shear_coefficient(od, id_, material.poisson, shear)
+    E, rho = material.youngs_modulus, material.density
+    kg = kappa * E / (2 * (1 + material.poisson))
+    w2 = (2 * np.pi * freq_hz) ** 2
+    a = E * inertia
+    b = -w2 * rho * inertia * (1 + E / kg)
+    c = w2 * w2 * rho * rho * inertia / kg - w2 * rho * area
+    k2 = (-b + np.sqrt(b * b - 4 * a * c)) / (2 * a)
+    return 2 * np.pi / np.sqrt(k2)
+
+
+def _segment_caps(start, segments, material, freq_hz, per_wavelength, shear):
+    """(bounds, caps): element-length caps [m] per segment from the bending wavelength."""
+    bounds = segment_bounds(start, segments)
+    if not freq_hz or per_wavelength <= 0:
+        return bounds, np.full(len(segments), np.inf)
+    return bounds, bending_wavelength(segments, material, freq_hz, shear) / per_wavelength
+
+
+def _cap_at(z, bounds, caps) -> np.ndarray:
+    """Cap of the segment containing each z (inf outside the body) [m]."""
+    idx = np.searchsorted(bounds, z) - 1
+    inside = (idx >= 0) & (idx < len(caps))
+    return np.where(inside, caps[np.clip(idx, 0, len(caps) - 1)], np.inf)
+
+
 def _body(z, start, segments, material, shear) -> BeamElements:
     """Elements on nodes z, properties from the segment containing each mid-point (§2 rule 4)."""
     bounds = segment_bounds(start, segments)
@@ -164,7 +207,7 @@ def _body(z, start, segments, material, shear) -> BeamElements:
     )
 
 
-def build_mesh(assembly: Assembly, options: ModelOptions = ModelOptions()) -> Mesh:
+def build_mesh(assembly: Assembly, options: ModelOptions = ModelOptions(), f_max_hz: float | None = None) -> Mesh:
     """Mesh holder and tool of an assembly (MODEL.md §2 plus contact-end grading).
 
     Parameters
@@ -173,6 +216,10 @@ def build_mesh(assembly: Assembly, options: ModelOptions = ModelOptions()) -> Me
         Validated geometry (SI).
     options : ModelOptions
         Element sizes and grading; see :class:`ModelOptions` for ``mesh_scale``.
+    f_max_hz : float, optional
+        Highest frequency the mesh must resolve [Hz]: every element is also no longer
+        than the local bending wavelength at f_max_hz over
+        ``options.elements_per_wavelength`` (stubby sections, high third modes).
 
     Returns
     -------
@@ -216,8 +263,23 @@ def build_mesh(assembly: Assembly, options: ModelOptions = ModelOptions()) -> Me
         np.concatenate([tool_geo, strictly_in_zone(holder_geo), within(grading, z_back, z_tip)]),
         (z_c0, L_h, z_back, z_tip),
     )
-    z_h = subdivide(holder_bp, zone, h_zone, h_out)
-    z_t = subdivide(tool_bp, zone, h_zone, h_out)
+    wave = (f_max_hz, options.elements_per_wavelength, options.shear)
+    hb, hc = _segment_caps(0.0, holder.segments, holder.material, *wave)
+    tb, tc = _segment_caps(z_back, tool.segments, tool.material, *wave)
+    hc, tc = hc * coarsen, tc * coarsen
+
+    def caps(own, other):
+        def cap_of(a, b):
+            mid = 0.5 * (a + b)
+            inside = (a >= z_c0 - MERGE_TOL) & (b <= L_h + MERGE_TOL)
+            # In the zone both bodies take the same caps, so their nodes stay coincident.
+            cap = np.minimum(np.where(inside, h_zone, h_out), _cap_at(mid, *own))
+            return np.where(inside, np.minimum(cap, _cap_at(mid, *other)), cap)
+
+        return cap_of
+
+    z_h = subdivide(holder_bp, caps((hb, hc), (tb, tc)))
+    z_t = subdivide(tool_bp, caps((tb, tc), (hb, hc)))
     if options.mesh_scale < 1.0:
         parts = math.ceil(1.0 / options.mesh_scale - 1e-9)
         z_h, z_t = split_elements(z_h, parts), split_elements(z_t, parts)

@@ -4,11 +4,11 @@ Eigenvalues are λ_r = ω_r² (1 + i η_r); f_r = sqrt(Re λ_r)/2π, ζ_r = η_r
 normalised with the unconjugated transpose, φᵀ M φ = 1, so that the modes of the complex
 symmetric K̃ are orthogonal even with non-proportional damping.
 
-The lowest modes come from a sparse shift-invert Arnoldi solve around
+The lowest modes come from a shift-invert Arnoldi solve (ARPACK) around
 σ = −(2π·200 Hz)² (below every eigenvalue, so K̃ − σM is non-singular even though the
-model is free-free). Receptances use the exact rigid-body vectors, the computed elastic
-modes and the static residual of all higher modes at σ, which that factorisation gives
-for free.
+model is free-free), on a banded LU of K̃ − σM with the DOFs ordered by z. Receptances
+use the exact rigid-body vectors, the computed elastic modes and the residual of all
+higher modes to first order in ω² about σ, which that factorisation gives for free.
 """
 
 from __future__ import annotations
@@ -17,7 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import zgbtrf, zgbtrs
 

@@ -71,10 +71,10 @@ def test_halving_every_element_changes_f1_f3_by_under_0_05_percent_and_zeta1_by_
     assert dz < 1e-2, dz
 
 
-def test_the_default_mesh_is_the_one_of_model_md_5_3(reference_assembly):
-    """≈300 DOFs for the reference assembly, and the converged value within 0.05 % of §13.4."""
+def test_the_default_mesh_stays_small_and_converged(reference_assembly):
+    """A few hundred DOFs for the reference assembly, and the converged value within 0.05 % of §13.4."""
     fe = build_model(reference_assembly)
-    assert fe.n_dofs < 400
+    assert fe.n_dofs < 500
     assert solve_modes(fe, HOLDER_A, 1).frequency_hz[0] == pytest.approx(4685.8, rel=5e-4)
 
 

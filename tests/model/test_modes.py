@@ -68,7 +68,7 @@ def test_modal_receptance_agrees_with_the_direct_solution(reference_assembly):
     assert np.max(np.abs(tip_receptance(fe, HOLDER_A, window) / near - 1)) < 1e-6
     coarse = build_model(reference_assembly, ModelOptions(mesh_scale=4.0))
     every = tip_receptance(coarse, HOLDER_A, f, n_modes=None)
-    assert np.max(np.abs(every / tip_receptance(coarse, HOLDER_A, f, method="direct") - 1)) < 1e-8
+    assert np.max(np.abs(every / tip_receptance(coarse, HOLDER_A, f, method="direct") - 1)) < 1e-7
 
 
 def test_modes_are_mass_normalised_and_orthogonal_without_conjugation(reference_assembly):
