@@ -105,8 +105,9 @@ def run(args) -> int:
     output_path(args.json, "JSON")
     assembly = load_assembly(args.assembly)
     params, options, source = holder_params(args)
-    result = analyse(assembly, params, options)
-    bounds = bending_bounds(assembly, options, fe=build_model(assembly, options))
+    fe = build_model(assembly, options)
+    result = analyse(assembly, params, options, fe=fe)
+    bounds = bending_bounds(assembly, options, fe=fe)
     out = {
         "assembly": args.assembly,
         "holder": assembly.holder.name,

@@ -64,7 +64,7 @@ def rigid_body_vectors(z_nodes) -> tuple[np.ndarray, np.ndarray]:
 PIECES = ("K_tool", "K_holder", "M_tool", "M_holder", "T0", "T1", "R0", "R1")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SparsePattern:
     """The union sparsity pattern of all model pieces, with each piece's values on it.
 
@@ -110,7 +110,7 @@ def common_pattern(pieces: dict, n: int) -> SparsePattern:
     return SparsePattern(n, union.indptr.copy(), union.indices.copy(), rows, cols, values)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BandLayout:
     """DOFs ordered by z give a narrow band (7 where only the contact couples the bodies).
 
@@ -146,7 +146,7 @@ def band_layout(z_nodes, pattern: SparsePattern) -> BandLayout:
     return BandLayout(perm, inverse, bw, 2 * bw + i - j, j)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FEModel:
     """Parameter-free pieces of the free-free holder–tool model (SI, global DOF order).
 

@@ -21,8 +21,9 @@ import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import zgbtrf, zgbtrs
 
 from taptune.errors import TaptuneError
-from taptune.model.fe import FEModel
-from taptune.model.params import HolderParams
+from taptune.model.fe import FEModel, build_model
+from taptune.model.options import ModelOptions
+from taptune.model.params import NOMINAL, HolderParams
 
 # Shift of the shift-invert solve [rad²/s²]: below the rigid-body pair, so K̃ − σM is regular.
 SIGMA = -((2 * np.pi * 200.0) ** 2)
@@ -386,7 +387,7 @@ class ModelResult:
         }
 
 
-def analyse(assembly, params: HolderParams | None = None, options=None, n_modes: int = 5) -> ModelResult:
+def analyse(assembly, params: HolderParams | None = None, options=None, n_modes: int = 5, fe=None) -> ModelResult:
     """Bending frequencies and damping of an assembly (build, solve, diagnose).
 
     Parameters
@@ -398,14 +399,12 @@ def analyse(assembly, params: HolderParams | None = None, options=None, n_modes:
     options : ModelOptions, optional
     n_modes : int
         Elastic modes to report.
+    fe : FEModel, optional
+        The model of ``assembly`` with ``options``, when the caller has built it already.
     """
-    from taptune.model.fe import build_model
-    from taptune.model.options import ModelOptions
-    from taptune.model.params import NOMINAL
-
     params = NOMINAL if params is None else params
     options = ModelOptions() if options is None else options
-    fe = build_model(assembly, options)
+    fe = build_model(assembly, options) if fe is None else fe
     modes = solve_modes(fe, params, n_modes)
     diag = mode_diagnostics(fe, params, modes)
     return ModelResult(
