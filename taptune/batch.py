@@ -4,7 +4,7 @@ No argument parsing here (that is :mod:`taptune.cli.cmd_batch`). The steps:
 
 1. :func:`discover` the WAV/FLAC files (recursively, sorted, so every run sees the same
    order) and :func:`find_assembly` for each (``--assembly``, else the ``.toml`` of the
-   same stem beside it, else an ``assembly.toml`` in the same folder);
+   same stem beside it, see there);
 2. :func:`plan` the work: load each assembly, hash each recording, skip what was already
    identified with the same content (result JSON or library provenance, unless
    ``force``), and group the rest into jobs (one recording each, or one holder each
@@ -234,11 +234,18 @@ def discover(paths: Sequence[str | os.PathLike]) -> tuple[list[Path], list[Row]]
 
 
 def find_assembly(recording: Path, assembly: str | os.PathLike | None = None) -> Path | None:
-    """The assembly file of ``recording``: ``assembly`` if given, else ``<stem>.toml``
-    beside it, else ``assembly.toml`` in the same folder; None if there is none."""
+    """The assembly file of ``recording``; None if there is none.
+
+    ``assembly`` if given; else, beside the recording, ``<stem>.toml``, then the stem
+    without a ``_tap``/``-tap`` ending (``er32_d16_tap.wav`` → ``er32_d16.toml``, as in
+    ``recordings/``), then ``assembly.toml``.
+    """
     if assembly is not None:
         return Path(assembly)
-    for candidate in (recording.with_suffix(".toml"), recording.parent / "assembly.toml"):
+    stem = recording.stem
+    bare = stem[:-4] if stem.lower().endswith(("_tap", "-tap")) and len(stem) > 4 else stem
+    for candidate in (recording.with_suffix(".toml"), recording.with_name(bare + ".toml"),
+                      recording.parent / "assembly.toml"):
         if candidate.is_file():
             return candidate
     return None

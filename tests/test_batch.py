@@ -109,6 +109,8 @@ def test_assembly_is_the_option_then_the_same_stem_then_assembly_toml(tmp_path):
     assert find_assembly(wav) == tmp_path / "assembly.toml"
     (tmp_path / "tap1.toml").write_text("")
     assert find_assembly(wav) == tmp_path / "tap1.toml"
+    (tmp_path / "er32.toml").write_text("")
+    assert find_assembly(tmp_path / "er32_tap.flac") == tmp_path / "er32.toml"  # recordings/ naming
     assert find_assembly(wav, "other.toml") == Path("other.toml")
 
 

@@ -10,7 +10,7 @@ def add_parser(sub, name, help_text):
     p = sub.add_parser(name, help=help_text, description=(
         "Identify every WAV/FLAC recording under the given files and folders (recursively), in "
         "parallel worker processes. Each recording uses --assembly, else the .toml with the same "
-        "stem beside it, else an assembly.toml in its folder. Writes one result JSON per recording "
+        "stem beside it (name_tap.wav may use name.toml), else an assembly.toml in its folder. Writes one result JSON per recording "
         "(as 'taptune identify --json') and summary.csv into --out, and stores the holders in the "
         "library. One bad file never stops the batch; the exit status is 1 if any file failed. "
         "Recordings identified before with the same content (sha256) are skipped unless --force."))
