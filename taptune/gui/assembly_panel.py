@@ -47,8 +47,13 @@ def read_asset_tables(folder: Path) -> tuple[list[tuple[str, dict]], list[tuple[
     """Holder and tool tables of every TOML file under ``folder``: ([(label, table)], [(label, table)]).
 
     A file may hold a ``[holder]``, a ``[tool]`` or both (a whole assembly); files that
-    are not valid TOML are skipped (they are reported when opened directly).
+    are not valid TOML are skipped (they are reported when opened directly). A valid
+    whole assembly gives its tables in the normal form of :func:`normal_tables`, so that
+    a loaded assembly is recognised in the lists.
     """
+    from taptune.errors import InputError
+    from taptune.io.assembly import parse_assembly
+
     holders, tools = [], []
     if not folder.is_dir():
         return holders, tools
@@ -57,11 +62,22 @@ def read_asset_tables(folder: Path) -> tuple[list[tuple[str, dict]], list[tuple[
             data = tomllib.loads(path.read_text(encoding="utf-8"))
         except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
             continue
+        try:
+            data = dict(zip(("holder", "tool"), normal_tables(parse_assembly(data, str(path)))))
+        except InputError:
+            pass  # a holder-only or tool-only file: its tables are used as written
         if isinstance(data.get("holder"), dict) and "name" in data["holder"]:
             holders.append((f"{data['holder']['name']}  [{path.stem}]", data["holder"]))
         if isinstance(data.get("tool"), dict):
             tools.append((f"{data['tool'].get('name', path.stem)}  [{path.stem}]", data["tool"]))
     return holders, tools
+
+
+def normal_tables(assembly) -> tuple[dict, dict]:
+    """The ``[holder]`` and ``[tool]`` tables of an assembly, written out the same way every time."""
+    from taptune.io.assembly import holder_to_dict
+
+    return holder_to_dict(assembly.holder), tool_table(assembly.tool)
 
 
 def tool_table(tool) -> dict:
@@ -297,10 +313,7 @@ class AssemblyPanel(QWidget):
 
     def set_assembly(self, assembly) -> None:
         """Show ``assembly`` in the form and make it current."""
-        from taptune.io.assembly import holder_to_dict
-
-        self._holder = holder_to_dict(assembly.holder)
-        self._tool = tool_table(assembly.tool)
+        self._holder, self._tool = normal_tables(assembly)
         self._filling = True
         try:
             self.stickout.setValue(assembly.stickout / MM)
