@@ -297,7 +297,7 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     growth = None
     if interface_tap is not None:
         ri = find_spectral_peaks(interface_tap, o)
-        growth = interface_growth(peaks, ri["peaks"])
+        growth = interface_growth(peaks, ri["peaks"], stationary=r["stationary"])
     nyq = recording.sample_rate / 2
     if expected_hz is not None and len(expected_hz) and float(np.max(expected_hz)) > 0.9 * nyq:
         warnings.append(f"sample rate {recording.sample_rate} Hz: the expected bending mode at "

@@ -226,20 +226,24 @@ def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
     return best
 
 
-def interface_growth(peaks: list[Peak], iface_peaks: list[Peak], tol_rel: float = 2e-3) -> list[float | None]:
+def interface_growth(peaks: list[Peak], iface_peaks: list[Peak], tol_rel: float = 2e-3,
+                     stationary=None) -> list[float | None]:
     """Level change [dB] of each peak from the tool-tip tap to the interface tap.
 
     Levels are relative to each recording's loudest peak; the median change over the
-    matched peaks is removed, so "grows" means grows relative to the rest. Peaks with
-    no partner within ``tol_rel`` (relative frequency) get None.
+    matched ringing peaks is removed, so "grows" means grows relative to the rest.
+    Peaks with no partner within ``tol_rel`` (relative frequency), and stationary ones
+    (hum: its level says nothing about the tap), get None.
     """
     if not iface_peaks:
         return [None] * len(peaks)
+    stat = [False] * len(peaks) if stationary is None else list(stationary)
     fi = np.array([q.hz for q in iface_peaks])
     raw = []
-    for p in peaks:
+    for p, st in zip(peaks, stat):
         j = int(np.argmin(np.abs(fi - p.hz)))
-        raw.append(iface_peaks[j].level_db - p.level_db if abs(fi[j] - p.hz) <= tol_rel * p.hz else None)
+        near = abs(fi[j] - p.hz) <= tol_rel * p.hz
+        raw.append(iface_peaks[j].level_db - p.level_db if near and not st else None)
     vals = [g for g in raw if g is not None]
     if not vals:
         return raw

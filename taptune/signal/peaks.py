@@ -44,7 +44,7 @@ class Peak:
     prominence_db : float
         Prominence in the averaged dB spectrum.
     snr_db : float
-        Peak over the spectrum's floor [dB].
+        Peak over the median of its surroundings [dB].
     note : str
         Why it got its kind (e.g. ``"interface band"``, ``"stationary (hum)"``).
     """
@@ -62,7 +62,8 @@ class Peak:
     def to_dict(self) -> dict:
         """Plain dict for JSON (contract keys ``hz, level_db, kind`` first)."""
         d = asdict(self)
-        return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in d.items()}
+        # 9 significant digits: 1e-5 Hz at 10 kHz, far below what the data carry.
+        return {k: (float(f"{v:.9g}") if isinstance(v, float) else v) for k, v in d.items()}
 
 
 def parabolic_peak(y, i):
