@@ -116,6 +116,7 @@ class MainWindow(QMainWindow):
         self.identification = None
         self.identified = None  # (recording, assembly) the identification was made from
         self._loading = None
+        self._analysis_seq = 0
         self._identify_task = None
 
         self.assembly_panel = AssemblyPanel()
@@ -257,11 +258,15 @@ class MainWindow(QMainWindow):
         self.file_label.setText(Path(path).name)
         self.statusBar().showMessage(f"Analysing {path}…")
         self._set_progress(None, "analysing the recording")
-        self._loading = self.runner.start(
+        # Only the latest request counts: an older analysis that ends later is ignored.
+        self._analysis_seq += 1
+        seq = self._analysis_seq
+        task = self.runner.start(
             analyse_file, path, assembly, with_progress=False,
-            on_finished=lambda result: self._analysed(path, assembly, result),
-            on_failed=lambda message: self._analysis_failed(path, message),
+            on_finished=lambda result: seq == self._analysis_seq and self._analysed(path, assembly, result),
+            on_failed=lambda message: seq == self._analysis_seq and self._analysis_failed(path, message),
         )
+        self._loading = task
         self._update_actions()
 
     def _analysed(self, path: str, assembly, result) -> None:
