@@ -18,6 +18,7 @@ _EXPORTS = {
     "ModelError": "modes",
     "solve_modes": "modes",
     "tip_receptance": "modes",
+    "mode_shapes": "modes",
     "ModelResult": "modes",
     "ModeDiagnostics": "modes",
     "mode_diagnostics": "modes",

@@ -296,6 +296,24 @@ def tip_receptance(fe: FEModel, params: HolderParams, freq_hz, method: str = "mo
     return modal_receptance(lam, phi, phi, rigid, rigid, freq_hz, residual, eig.sigma)
 
 
+def mode_shapes(fe: FEModel, modes: Modes):
+    """Translational mode shapes of each body for plotting (MODEL.md §12).
+
+    Returns
+    -------
+    z_holder : ndarray, shape (n_h,)
+        Holder node positions [m].
+    w_holder : ndarray, complex, shape (n_h, n_modes)
+        Holder w of each mass-normalised mode.
+    z_tool : ndarray, shape (n_t,)
+    w_tool : ndarray, complex, shape (n_t, n_modes)
+        The same for the tool (for the rigid-contact variant: its untied nodes).
+    """
+    n_h = len(fe.z_holder)
+    w = modes.vectors[0::2]
+    return fe.z_holder, w[:n_h], fe.z_tool, w[n_h:]
+
+
 # --------------------------------------------------------------------------- diagnostics
 
 

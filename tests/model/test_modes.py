@@ -5,7 +5,14 @@ import pytest
 
 from taptune.model import analyse
 from taptune.model.fe import build_model, rigid_contact_model
-from taptune.model.modes import ModelError, mode_diagnostics, rigid_body_modes, solve_modes, tip_receptance
+from taptune.model.modes import (
+    ModelError,
+    mode_diagnostics,
+    mode_shapes,
+    rigid_body_modes,
+    solve_modes,
+    tip_receptance,
+)
 from taptune.model.options import ModelOptions
 from taptune.model.params import NOMINAL, HolderParams
 
@@ -127,3 +134,21 @@ def test_receptance_is_undefined_at_zero_frequency(reference_assembly):
     fe = build_model(reference_assembly)
     with pytest.raises(ValueError):
         tip_receptance(fe, HOLDER_A, [0.0])
+
+
+def test_first_mode_shape_is_a_free_free_bending_shape_with_two_nodes(reference_assembly):
+    """Mode 1 of a free-free assembly bends with two nodes; in the zone the tool follows the holder
+    but slips against it by the contact compliance (less than the tip motion)."""
+    fe = build_model(reference_assembly)
+    modes = solve_modes(fe, HOLDER_A, 2)
+    z_h, w_h, z_t, w_t = mode_shapes(fe, modes)
+    assert w_h.shape == (len(z_h), 2) and w_t.shape == (len(z_t), 2)
+    z = np.concatenate([z_h, z_t])
+    w = np.concatenate([w_h[:, 0], w_t[:, 0]])
+    w = (w / w[np.argmax(np.abs(w))]).real
+    order = np.argsort(z, kind="stable")
+    signs = np.sign(w[order][np.abs(w[order]) > 1e-3])
+    assert np.count_nonzero(np.diff(signs)) == 2
+    hn, tn = fe.contact_nodes.T
+    slip = np.abs(w_h[hn, 0] - w_t[tn - len(z_h), 0])
+    assert 0 < slip.max() < 0.3 * np.abs(w_t[-1, 0])
