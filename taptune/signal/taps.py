@@ -198,7 +198,7 @@ def is_double_hit(x, onset: int, sample_rate: float, window_s=(2e-3, 30e-3), ord
     # In noise the prediction error is noise everywhere: a spike must also stand out
     # from the error's own median (noise bumps of a 0.3 ms envelope reach ~2x).
     top = float(np.max(later))
-    return bool(top > ratio * first and top > 4.0 * float(np.median(later)))
+    return bool(top > ratio * first and top > 3.0 * float(np.median(later)))
 
 
 def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
