@@ -481,9 +481,9 @@ def _analyse(items, id_options, out_dir: Path):
 
 def _result_json(view, item: Item, recording, analysis, group_items, joint_objective: float) -> dict:
     """The identify --json document of one recording, plus what the next batch needs to skip it."""
-    from taptune.cli.cmd_identify import result_dict
+    from taptune.identify.pipeline import identification_record
 
-    data = result_dict([recording], [item.assembly], [analysis], view)
+    data = identification_record([recording], [item.assembly], [analysis], view)
     data["sha256"] = item.sha256
     data["assembly"] = str(item.assembly_path)
     data["assembly_sha256"] = item.assembly_sha256
@@ -591,7 +591,6 @@ class _Running:
     process: object
     items: tuple
     fraction: float = 0.0
-    outcome: Outcome | None = None
 
 
 def _died(run: _Running) -> Outcome:
@@ -671,10 +670,6 @@ def read_summary(path: str | os.PathLike) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
-def _sort_key(row: Row) -> str:
-    return row.file
-
-
 def run_batch(
     paths: Sequence[str | os.PathLike],
     options: BatchOptions,
@@ -737,7 +732,7 @@ def run_batch(
         done = {r.file for r in rows}
         rows += [Row(str(i.path), i.holder, "cancelled", message="interrupted before it finished")
                  for job in the_plan.jobs for i in job if str(i.path) not in done]
-    rows.sort(key=_sort_key)
+    rows.sort(key=lambda r: r.file)
     pages.sort(key=lambda p: p.file)
     summary = out_dir / SUMMARY_NAME
     write_summary(summary, rows)

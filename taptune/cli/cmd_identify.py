@@ -46,29 +46,6 @@ def run_identification(recordings, assemblies, seed=0, jobs=None, progress=None)
     return identify_recordings(recordings, assemblies, IdentifyOptions(seed=seed, jobs=jobs), progress)
 
 
-def result_dict(recordings, assemblies, analyses, result) -> dict:
-    """CLI-CONTRACT.md JSON of an identification (lists per recording for a joint fit)."""
-    per_file = []
-    for rec, analysis in zip(recordings, analyses):
-        d = analysis.to_dict()
-        per_file.append({
-            "file": rec.path,
-            "sample_rate": rec.sample_rate,
-            "taps": d["taps"],
-            "peaks": d["peaks"],
-            "warnings": d["warnings"],
-        })
-    out = {"holder": assemblies[0].holder.name}
-    if len(per_file) == 1:
-        out.update({k: v for k, v in per_file[0].items() if k != "warnings"})
-    else:
-        out["file"] = [f["file"] for f in per_file]
-        out["recordings"] = [{k: v for k, v in f.items() if k != "warnings"} for f in per_file]
-    out.update(result.to_dict())
-    out["warnings"] = [w for f in per_file for w in f["warnings"]] + out["warnings"]
-    return out
-
-
 def print_summary(out: dict, result, stream=None) -> None:
     from taptune.cli.common import format_table
 
@@ -97,6 +74,7 @@ def print_summary(out: dict, result, stream=None) -> None:
 
 def run(args) -> int:
     from taptune.cli.common import ProgressBar, output_path, write_json
+    from taptune.identify.pipeline import identification_record
     from taptune.identify.optimize import Cancelled
 
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
@@ -111,7 +89,7 @@ def run(args) -> int:
         return 130
     finally:
         bar.close()
-    out = result_dict(recordings, assemblies, analyses, result)
+    out = identification_record(recordings, assemblies, analyses, result)
     if not args.no_save:
         from taptune.library.record import save_identification
 

@@ -62,3 +62,29 @@ def identify_recordings(recordings, assemblies, options=None, progress=None, lib
         analyse_for_assembly(r, a, library_params, options.model) for r, a in zip(recordings, assemblies)
     ]
     return analyses, identify(analyses, assemblies, options, progress=progress)
+
+
+def identification_record(recordings, assemblies, analyses, result) -> dict:
+    """The JSON record of an identification (CLI-CONTRACT.md keys; lists per recording for a joint fit).
+
+    What ``taptune identify --json`` prints and ``taptune batch`` writes per recording.
+    """
+    per_file = []
+    for rec, analysis in zip(recordings, analyses):
+        d = analysis.to_dict()
+        per_file.append({
+            "file": rec.path,
+            "sample_rate": rec.sample_rate,
+            "taps": d["taps"],
+            "peaks": d["peaks"],
+            "warnings": d["warnings"],
+        })
+    out = {"holder": assemblies[0].holder.name}
+    if len(per_file) == 1:
+        out.update({k: v for k, v in per_file[0].items() if k != "warnings"})
+    else:
+        out["file"] = [f["file"] for f in per_file]
+        out["recordings"] = [{k: v for k, v in f.items() if k != "warnings"} for f in per_file]
+    out.update(result.to_dict())
+    out["warnings"] = [w for f in per_file for w in f["warnings"]] + out["warnings"]
+    return out
