@@ -80,6 +80,11 @@ def run(args) -> int:
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
         output_path(path, what)
     recordings, assemblies = load_inputs(args.wav, args.assembly)
+    if not args.no_save:
+        from taptune.library.store import HolderLibrary, default_library_path
+
+        # A broken library is reported before the fit, not after it.
+        HolderLibrary(default_library_path(args.library)).entries()
     bar = ProgressBar("identify")
     try:
         analyses, result = run_identification(recordings, assemblies, args.seed, args.jobs, bar)
