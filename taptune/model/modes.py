@@ -155,7 +155,13 @@ def _eigen(fe: FEModel, params: HolderParams, k: int, sigma: float = SIGMA) -> _
         lam, vec = sla.eig(K.toarray(), M.toarray())
     else:
         op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=complex)
-        lam, vec = spla.eigs(K, k=k, M=M, sigma=sigma, OPinv=op, ncv=min(n - 1, max(2 * k + 1, 20)), tol=1e-12)
+        try:
+            lam, vec = spla.eigs(K, k=k, M=M, sigma=sigma, OPinv=op, ncv=min(n - 1, max(2 * k + 1, 20)), tol=1e-12)
+        except spla.ArpackNoConvergence:
+            # Rare (clustered eigenvalues): the dense solve is slow but always answers.
+            lam, vec = sla.eig(K.toarray(), M.toarray())
+            nearest = np.argsort(np.abs(lam - sigma))[:k]
+            lam, vec = lam[nearest], vec[:, nearest]
     order = np.argsort(lam.real)
     return _Eigen(lam[order], vec[:, order], lu, sigma)
 
