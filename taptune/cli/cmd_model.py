@@ -66,8 +66,12 @@ def holder_params(args):
             from taptune.library.store import HolderLibrary, default_library_path
         except ImportError as err:
             raise InputError(f"--holder {args.holder}: the holder library is not available ({err})") from None
-        entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
-        options = ModelOptions.from_dict(entry.model_options or {})
+        library = HolderLibrary(default_library_path(args.library))
+        entry = library.get(args.holder)
+        try:
+            options = ModelOptions.from_dict(entry.model_options or {})
+        except (TypeError, ValueError) as err:
+            raise InputError(f"{library.path}: holder {entry.name!r} has unusable model_options ({err})") from None
         return entry.params, options, f"library holder '{entry.name}'"
     return NOMINAL, ModelOptions(), "nominal (MODEL.md §8.1)"
 

@@ -65,6 +65,24 @@ def test_holder_from_the_library(reference_toml, tmp_path, capsys):
     assert code == 2 and err.count("\n") == 1 and "no such" in err
 
 
+def test_library_holder_keeps_its_model_options_and_bad_ones_are_reported(reference_toml, tmp_path, capsys):
+    """The parameters were identified on a mesh: the model uses the options stored with them."""
+    from taptune.io.assembly import load_assembly
+    from taptune.library.schema import HolderEntry
+    from taptune.library.store import HolderLibrary
+    from taptune.model.params import HolderParams
+
+    holder = load_assembly(reference_toml).holder
+    lib = HolderLibrary(tmp_path / "holders.json")
+    lib.put(HolderEntry.create(holder, HolderParams(**HOLDER_A), model_options={"h_max_mm": 1.0, "mass": "core"}))
+    code, out, err = taptune(capsys, "model", reference_toml, "--holder", holder.name, "--library", lib.path, "--json", "-")
+    assert code == 0, err
+    assert json.loads(out)["model_options"]["mass"] == "core"
+    lib.put(HolderEntry.create(holder, HolderParams(**HOLDER_A), model_options={"shear": "euler"}))
+    code, out, err = taptune(capsys, "model", reference_toml, "--holder", holder.name, "--library", lib.path)
+    assert code == 2 and err.count("\n") == 1 and "model_options" in err
+
+
 BAD_ASSEMBLIES = {
     "missing_file": None,
     "not_toml": "this is [not toml",
