@@ -47,10 +47,12 @@ def test_mesh_is_graded_to_short_elements_at_both_zone_ends(reference_assembly):
 
 
 def test_mesh_scale_one_half_splits_every_element_in_two(reference_assembly):
-    base = build_mesh(reference_assembly)
-    half = build_mesh(reference_assembly, ModelOptions(mesh_scale=0.5))
-    assert np.allclose(half.holder.z[::2], base.holder.z) and np.allclose(half.tool.z[::2], base.tool.z)
-    assert len(half.contact_elements) == 2 * len(base.contact_elements)
+    """The convergence check of §5.3 halves exactly the elements of the default model."""
+    base = build_model(reference_assembly)
+    half = build_model(reference_assembly, ModelOptions(mesh_scale=0.5))
+    assert np.array_equal(half.z_holder[::2], base.z_holder) and np.array_equal(half.z_tool[::2], base.z_tool)
+    assert half.n_elements == 2 * base.n_elements
+    assert len(half.contact_nodes) == 2 * len(base.contact_nodes) - 1
 
 
 def test_element_properties_come_from_the_segment_at_the_element_midpoint(reference_assembly):
