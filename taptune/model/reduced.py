@@ -1,0 +1,542 @@
+"""Fast reduced evaluator of the holder–tool model for the optimiser (MODEL.md §7.5).
+
+The optimiser needs f1–f3, ζ1 and the tool-tip receptance on a 201-point window for
+thousands of parameter vectors p (MODEL.md §8.1) per identification. The full model
+(``build_model`` + ``solve_modes``) costs milliseconds per p; this module builds, once
+per assembly, a small Galerkin model that reproduces it and answers in a fraction of
+that.
+
+Method (all parameter-free work is done once in :meth:`FastEvaluator.from_model`):
+
+1. **Component basis** per body (holder, tool): free-free modes of the body (rigid pair
+   included), attachment shapes (K_b − σM_b)⁻¹f for line loads of Legendre profile
+   P0 … P15 over the contact zone (forces and moments: the only loads the contact layer
+   can put on a body), and, for the tool, the static response to a tip force. The
+   affine pieces of the model are projected onto it (n ≈ 75).
+2. **Compression** (proper orthogonal decomposition): the component model is solved at
+   all 128 corners of the search space and at Latin-hypercube points; per body, the
+   left singular vectors of the snapshots (modes 1–6, real and imaginary parts, and the
+   tip response) carry the basis, r ≈ 40–60 in all. The rigid-body motions are kept
+   exactly. The converged Ritz blocks at the training points are stored as start blocks.
+3. **Per candidate**: one complex LU of K̃(p) − σM(p) (σ = −(2π·200 Hz)², below every
+   eigenvalue), block inverse iteration with the rigid-body motions deflated, starting
+   from the stored block of the nearest training point; a complex Rayleigh–Ritz step
+   with the unconjugated transpose on the block plus the static tip response; a
+   residual check that adds iterations until modes 1–3 have converged. The eigenvalues
+   are genuinely complex (no first-order loss estimate: the contact loss factor 10·eta
+   reaches 1). The receptance is the modal sum over the exact rigid-body pair and the
+   Ritz modes plus the static residual of everything else at σ.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.polynomial import legendre
+from scipy.linalg.lapack import zgetrf, zgetrs
+
+from taptune.io.assembly import Assembly
+from taptune.model.fe import FEModel, build_model
+from taptune.model.options import ModelOptions
+from taptune.model.params import ETA_REFERENCE_MM, LOG_PARAMS, P_LOWER, P_UPPER
+
+# Shift of the inverse iteration [rad²/s²]: below the rigid-body pair, so K̃ − σM is
+# regular although the model is free-free (the same shift as the full model's solver).
+SIGMA = -((2 * np.pi * 200.0) ** 2)
+TWO_PI = 2 * np.pi
+# Affine pieces in the order of the coefficient vector of _stiffness_coefficients.
+_K_PIECES = ("K_tool", "K_holder", "T0", "T1", "R0", "R1")
+
+
+@dataclass(frozen=True)
+class ReductionOptions:
+    """How the reduced model is built and solved (defaults measured to meet MODEL.md §7.5).
+
+    Parameters
+    ----------
+    body_modes : int
+        Free-free modes per body in the component basis (the rigid pair included).
+    legendre_terms : int
+        Legendre profiles P0 … P(n−1) of the contact line loads (force and moment).
+    n_lhs : int
+        Latin-hypercube training points (the 128 corners are always added).
+    seed : int
+        Seed of the Latin hypercube (the build is deterministic).
+    pod_tolerance : float
+        Singular values below this fraction of the largest (per body) are dropped.
+    block : int
+        Elastic vectors iterated per candidate.
+    tol : float
+        Relative residual ‖K̃φ − λMφ‖/‖K̃φ‖ that modes 1–3 must reach.
+    min_iterations, max_iterations : int
+        Inverse iterations per candidate; beyond the maximum a dense eigen-solution of
+        the reduced model is used (rare).
+    """
+
+    body_modes: int = 6
+    legendre_terms: int = 16
+    n_lhs: int = 192
+    seed: int = 0
+    pod_tolerance: float = 1e-5
+    block: int = 6
+    tol: float = 1e-3
+    min_iterations: int = 2
+    max_iterations: int = 8
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The model at one parameter vector, as the optimiser needs it.
+
+    Attributes
+    ----------
+    bending_hz : ndarray, shape (3,)
+        Bending frequencies f1–f3 [Hz].
+    damping_ratio : ndarray, shape (3,)
+        ζ1–ζ3.
+    tip_receptance : ndarray, complex, shape (m,)
+        Tool-tip direct receptance H_tt on the requested frequencies [m/N], rigid-body
+        terms included.
+    iterations : int
+        Inverse iterations spent (0: dense fallback).
+    """
+
+    bending_hz: np.ndarray
+    damping_ratio: np.ndarray
+    tip_receptance: np.ndarray
+    iterations: int
+
+
+@dataclass(frozen=True)
+class BatchEvaluation:
+    """:class:`Evaluation` for many parameter vectors, stacked along the first axis.
+
+    Attributes
+    ----------
+    bending_hz, damping_ratio : ndarray, shape (n, 3)
+    tip_receptance : ndarray, complex, shape (n, m)
+    iterations : ndarray, int, shape (n,)
+    """
+
+    bending_hz: np.ndarray
+    damping_ratio: np.ndarray
+    tip_receptance: np.ndarray
+    iterations: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.bending_hz)
+
+    def __getitem__(self, i: int) -> Evaluation:
+        return Evaluation(self.bending_hz[i], self.damping_ratio[i], self.tip_receptance[i], int(self.iterations[i]))
+
+
+def stiffness_coefficients(p) -> np.ndarray:
+    """Coefficients of (K_tool, K_holder, T0, T1, R0, R1) in K̃(p), complex, shape (6,).
+
+    p is the optimiser's vector of MODEL.md §8.1 (log10 of the four intensities, alpha
+    [%], density factor, modulus factor); the contact intensities per mm become line
+    stiffnesses per metre (× 1e3), as in :attr:`HolderParams.c_t`.
+    """
+    k_tt, k_rr, eta_tt, eta_rr = 10.0 ** np.asarray(p[:LOG_PARAMS], dtype=float)
+    a = p[4] / 100.0
+    c_t = k_tt * 1e3 * (1 + 1j * eta_tt * ETA_REFERENCE_MM)
+    c_r = k_rr * 1e3 * (1 + 1j * eta_rr * ETA_REFERENCE_MM)
+    return np.array([1.0, p[6], c_t, c_t * a, c_r, c_r * a], dtype=complex)
+
+
+# --------------------------------------------------------------------------- component basis
+
+
+def contact_zone(fe: FEModel) -> tuple[float, float]:
+    """(z_c0, L_h): ends of the contact zone [m], from the model's contact node pairs."""
+    z = fe.z_holder[fe.contact_nodes[:, 0]]
+    return float(z.min()), float(z.max())
+
+
+def contact_line_loads(fe: FEModel, n_terms: int) -> np.ndarray:
+    """Consistent nodal loads of Legendre-profiled contact line loads, shape (n_dofs, 2·n_terms).
+
+    A smooth tool displacement field (w = P_k(ξ), θ = dw/dz), or rotation field
+    (θ = P_k(ξ)), pushed through the unit contact layer T0 (R0) gives the loads that a
+    layer of Legendre-profiled line force (moment) puts on both bodies: equal and
+    opposite, with each body's own interpolation. The columns span the contact loads
+    of every parameter set up to the resolution of the profiles.
+    """
+    z0, z1 = contact_zone(fe)
+    length = z1 - z0
+    z = fe.z_tool
+    xi = np.clip(2 * (z - z0) / length - 1, -1.0, 1.0)
+    n_h = 2 * len(fe.z_holder)
+    w_field = np.zeros((fe.n_dofs, n_terms))
+    t_field = np.zeros((fe.n_dofs, n_terms))
+    for k in range(n_terms):
+        c = np.zeros(k + 1)
+        c[k] = 1.0
+        w_field[n_h::2, k] = legendre.legval(xi, c)
+        w_field[n_h + 1 :: 2, k] = legendre.legval(xi, legendre.legder(c)) * 2 / length
+        t_field[n_h + 1 :: 2, k] = legendre.legval(xi, c)
+    return np.hstack([fe.T0 @ w_field, fe.R0 @ t_field])
+
+
+def component_basis(fe: FEModel, options: ReductionOptions = ReductionOptions()) -> np.ndarray:
+    """Per-body Craig–Bampton-like basis of the full model, shape (n_dofs, n).
+
+    Block diagonal (holder columns, then tool columns), Euclidean-orthonormal.
+    """
+    n_h = 2 * len(fe.z_holder)
+    loads = contact_line_loads(fe, options.legendre_terms)
+    bodies = [(slice(0, n_h), fe.K_holder, fe.M_holder), (slice(n_h, fe.n_dofs), fe.K_tool, fe.M_tool)]
+    columns = []
+    for b, (dofs, K, M) in enumerate(bodies):
+        # The real part: the body loss factor scales the whole matrix, shapes are real.
+        k = K[dofs, dofs].toarray().real
+        m = M[dofs, dofs].toarray()
+        _, modes = sla.eigh(k, m, subset_by_index=[0, options.body_modes - 1])
+        shifted = sla.cho_factor(k - SIGMA * m)
+        rhs = loads[dofs]
+        if b == 1:
+            tip = np.zeros((k.shape[0], 1))
+            tip[-2] = 1.0
+            rhs = np.hstack([rhs, tip])
+        shapes = np.hstack([modes, sla.cho_solve(shifted, rhs)])
+        # Equal M-norms before the orthonormalisation, so no shape is lost to scaling.
+        shapes /= np.sqrt(np.einsum("ij,ij->j", shapes, m @ shapes))
+        u, s, _ = np.linalg.svd(shapes, full_matrices=False)
+        columns.append((dofs, u[:, s > 1e-10 * s[0]]))
+    basis = np.zeros((fe.n_dofs, sum(u.shape[1] for _, u in columns)))
+    col = 0
+    for dofs, u in columns:
+        basis[dofs, col : col + u.shape[1]] = u
+        col += u.shape[1]
+    return basis
+
+
+# --------------------------------------------------------------------------- reduced model
+
+
+@dataclass(frozen=True, eq=False)
+class _Projected:
+    """The affine pieces on a basis V: K̃(p) = Σ c_i(p) K_i, M(p) = M_tool + df·M_holder.
+
+    ``k_pieces`` (6, n, n) complex; ``rigid`` (n, 2) the rigid motions t, r in reduced
+    coordinates; ``tip`` (n,) the tip DOF's row of V.
+    """
+
+    k_pieces: np.ndarray
+    m_tool: np.ndarray
+    m_holder: np.ndarray
+    rigid: np.ndarray
+    tip: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.tip.shape[0]
+
+    @classmethod
+    def from_model(cls, fe: FEModel, V: np.ndarray) -> "_Projected":
+        def project(m):
+            return V.T @ (m @ V)
+
+        rigid, *_ = np.linalg.lstsq(V, np.stack(fe.rigid_vectors, axis=1), rcond=None)
+        return cls(
+            k_pieces=np.stack([project(getattr(fe, name)) for name in _K_PIECES]).astype(complex),
+            m_tool=project(fe.M_tool),
+            m_holder=project(fe.M_holder),
+            rigid=rigid,
+            tip=V[fe.tip_dof].copy(),
+        )
+
+    def compress(self, Q: np.ndarray, rigid: np.ndarray) -> "_Projected":
+        """The same pieces on the sub-basis Q (n, r); ``rigid`` gives t, r in Q coordinates."""
+        return _Projected(
+            k_pieces=np.einsum("ai,kab,bj->kij", Q, self.k_pieces, Q, optimize=True),
+            m_tool=Q.T @ self.m_tool @ Q,
+            m_holder=Q.T @ self.m_holder @ Q,
+            rigid=rigid,
+            tip=Q.T @ self.tip,
+        )
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """Internal result of one candidate: Ritz values/vectors and receptance ingredients."""
+
+    lam: np.ndarray  # (k,) complex Ritz values, ascending Re
+    vectors: np.ndarray  # (n, k) Ritz vectors, φᵀMφ = 1
+    tip_modal: np.ndarray  # (k,) φ_tip
+    rigid_tip: float  # Σ_rigid ψ_tip²
+    residual: complex  # static contribution of all other modes at σ
+    static: np.ndarray  # (n,) elastic part of (K̃ − σM)⁻¹ e_tip
+    iterations: int
+
+
+class _Solver:
+    """Per-candidate modal solution of a projected model (see the module docstring)."""
+
+    def __init__(self, model: _Projected, options: ReductionOptions):
+        self.model = model
+        self.options = options
+        n = model.n
+        self.k_flat = model.k_pieces.reshape(len(_K_PIECES), n * n)
+        self.m_tool = model.m_tool
+        self.m_holder = model.m_holder
+
+    def matrices(self, p):
+        n = self.model.n
+        K = (stiffness_coefficients(p) @ self.k_flat).reshape(n, n)
+        M = self.m_tool + p[5] * self.m_holder
+        return K, M
+
+    def solve(self, p, start: np.ndarray) -> _Solution:
+        opt = self.options
+        model = self.model
+        K, M = self.matrices(p)
+        lu, piv, info = zgetrf(K - SIGMA * M)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"K̃ − σM is singular for p = {np.asarray(p)}")
+        R = model.rigid
+        MR = M @ R
+        gram_inv = np.linalg.inv(R.T @ MR)
+
+        def deflate(X):
+            # Remove the rigid-body components (M-orthogonal projection): inverse
+            # iteration at σ < 0 would otherwise amplify them above every elastic mode.
+            return X - R @ (gram_inv @ (MR.T @ X))
+
+        tip = model.tip
+        static, _ = zgetrs(lu, piv, tip.astype(complex))
+        tip_static = tip @ static
+        rigid_tip = float(tip @ R @ gram_inv @ (R.T @ tip))
+        static_elastic = deflate(static[:, None])
+        X = deflate(start.astype(complex))
+        iterations = 0
+        while True:
+            X, _ = zgetrs(lu, piv, M @ X)
+            X, _ = np.linalg.qr(deflate(X))
+            iterations += 1
+            if iterations < opt.min_iterations:
+                continue
+            lam, Phi, converged = self._rayleigh_ritz(K, M, X, static_elastic)
+            if converged:
+                break
+            if iterations >= opt.max_iterations:
+                lam, Phi = self._dense(K, M, deflate)
+                iterations = 0
+                break
+        phi_tip = tip @ Phi
+        residual = tip_static - rigid_tip / (-SIGMA) - np.sum(phi_tip**2 / (lam - SIGMA))
+        return _Solution(lam, Phi, phi_tip, rigid_tip, residual, static_elastic[:, 0], iterations)
+
+    def _rayleigh_ritz(self, K, M, X, static):
+        """Ritz pairs on span[X, static], normalised φᵀMφ = 1, and whether modes 1–3 converged."""
+        Y, r = np.linalg.qr(np.hstack([X, static]))
+        if abs(r[-1, -1]) < 1e-10 * abs(r[0, 0]):
+            Y = Y[:, :-1]  # the static response is already in span X
+        KY, MY = K @ Y, M @ Y
+        lam, Z = _eig_small(Y.T @ KY, Y.T @ MY)
+        Z = Z / np.sqrt(np.einsum("ij,ij->j", Z, (Y.T @ MY) @ Z))
+        check = Z[:, :3]
+        kz = KY @ check
+        res = kz - (MY @ check) * lam[:3]
+        rel = np.linalg.norm(res, axis=0) / np.linalg.norm(kz, axis=0)
+        return lam, Y @ Z, bool(np.all(rel < self.options.tol))
+
+    def _dense(self, K, M, deflate):
+        """All modes of the reduced model (slow path for a non-converging candidate)."""
+        lam, vec = sla.eig(K, M)
+        order = np.argsort(lam.real)
+        lam, vec = lam[order][2:], vec[:, order][:, 2:]
+        vec = deflate(vec)
+        vec = vec / np.sqrt(np.einsum("ij,ij->j", vec, M @ vec))
+        return lam, vec
+
+
+def _eig_small(A, B):
+    """Eigenpairs of the small complex pencil (A, B), ascending Re λ."""
+    alpha, beta, _, vr, _, info = sla.lapack.zggev(A, B, compute_vl=0, compute_vr=1)
+    if info != 0:
+        raise np.linalg.LinAlgError("the Rayleigh–Ritz eigenproblem failed")
+    lam = alpha / beta
+    order = np.argsort(lam.real)
+    return lam[order], vr[:, order]
+
+
+# --------------------------------------------------------------------------- training
+
+
+def training_points(n_lhs: int, seed: int) -> np.ndarray:
+    """Unit-cube training points: the 128 corners, then a seeded Latin hypercube, (128 + n_lhs, 7)."""
+    corners = np.array(list(itertools.product((0.0, 1.0), repeat=7)))
+    rng = np.random.default_rng(seed)
+    strata = np.stack([rng.permutation(n_lhs) for _ in range(7)], axis=1)
+    lhs = (strata + rng.random((n_lhs, 7))) / n_lhs
+    return np.vstack([corners, lhs])
+
+
+# Distances for the nearest training point weight the parameters by how much they move
+# the mode shapes: the two stiffness intensities most, the factors least.
+_SHAPE_WEIGHTS = np.array([1.0, 1.0, 0.5, 0.5, 0.3, 0.1, 0.1])
+
+
+def _unit(p) -> np.ndarray:
+    return (np.asarray(p, dtype=float) - P_LOWER) / (P_UPPER - P_LOWER)
+
+
+class FastEvaluator:
+    """Reduced model of one assembly for the optimiser (see the module docstring).
+
+    Parameters
+    ----------
+    assembly : Assembly
+        Validated geometry.
+    options : ModelOptions
+        Mesh options of the full model it reproduces.
+    reduction : ReductionOptions
+        Basis and solver settings.
+
+    Examples
+    --------
+    >>> ev = FastEvaluator(assembly)                               # doctest: +SKIP
+    >>> e = ev.evaluate(to_p(NOMINAL), 4800 + np.arange(-100, 101.0))  # doctest: +SKIP
+    >>> e.bending_hz, e.damping_ratio, abs(e.tip_receptance).max()    # doctest: +SKIP
+    """
+
+    def __init__(self, assembly: Assembly, options: ModelOptions = ModelOptions(), reduction: ReductionOptions = ReductionOptions()):
+        self._setup(build_model(assembly, options), reduction)
+
+    @classmethod
+    def from_model(cls, fe: FEModel, reduction: ReductionOptions = ReductionOptions()) -> "FastEvaluator":
+        """Evaluator for an already built full model."""
+        self = cls.__new__(cls)
+        self._setup(fe, reduction)
+        return self
+
+    def _setup(self, fe: FEModel, reduction: ReductionOptions) -> None:
+        self.fe = fe
+        self.reduction = reduction
+        V = component_basis(fe, reduction)
+        component = _Projected.from_model(fe, V)
+        train_u = training_points(reduction.n_lhs, reduction.seed)
+        train_p = P_LOWER + train_u * (P_UPPER - P_LOWER)
+        snapshots = _train(component, train_u, train_p, reduction)
+        Q, rigid = _pod_basis(component, snapshots, len(fe.z_holder) * 2, V, reduction.pod_tolerance)
+        self.model = component.compress(Q, rigid)
+        self.basis = V @ Q
+        self.component_size = component.n
+        self._solver = _Solver(self.model, reduction)
+        # Start blocks in the compressed coordinates (Q is orthonormal).
+        self._train_key = train_u * _SHAPE_WEIGHTS
+        self._starts = np.einsum("ai,tab->tib", Q, snapshots.blocks, optimize=True)
+
+    @property
+    def size(self) -> int:
+        """Dimension of the reduced model."""
+        return self.model.n
+
+    def _start(self, p) -> np.ndarray:
+        d = self._train_key - _unit(p) * _SHAPE_WEIGHTS
+        return self._starts[np.argmin(np.einsum("ij,ij->i", d, d))]
+
+    def evaluate(self, p, window_hz) -> Evaluation:
+        """f1–f3, ζ1–ζ3 and the tip receptance on ``window_hz`` at parameter vector p.
+
+        Parameters
+        ----------
+        p : array_like, shape (7,)
+            Parameter vector of MODEL.md §8.1 (see :func:`taptune.model.params.to_p`).
+        window_hz : array_like, shape (m,)
+            Frequencies [Hz], > 0.
+
+        Returns
+        -------
+        Evaluation
+        """
+        p = np.asarray(p, dtype=float)
+        sol = self._solver.solve(p, self._start(p))
+        w2 = (TWO_PI * np.asarray(window_hz, dtype=float)) ** 2
+        h = sol.rigid_tip / (-w2) + (1.0 / (sol.lam[None, :] - w2[:, None])) @ (sol.tip_modal**2) + sol.residual
+        lam = sol.lam[:3]
+        return Evaluation(
+            bending_hz=np.sqrt(lam.real) / TWO_PI,
+            damping_ratio=lam.imag / lam.real / 2,
+            tip_receptance=h,
+            iterations=sol.iterations,
+        )
+
+    def evaluate_many(self, P, window_hz) -> BatchEvaluation:
+        """:meth:`evaluate` for every row of P (n, 7) on one frequency window."""
+        out = [self.evaluate(p, window_hz) for p in np.atleast_2d(P)]
+        return BatchEvaluation(
+            bending_hz=np.array([e.bending_hz for e in out]),
+            damping_ratio=np.array([e.damping_ratio for e in out]),
+            tip_receptance=np.array([e.tip_receptance for e in out]),
+            iterations=np.array([e.iterations for e in out]),
+        )
+
+
+@dataclass(frozen=True)
+class _Snapshots:
+    """Training solutions in component coordinates: ``blocks`` (t, n, block) Ritz
+    vectors of modes 1 … block; ``static`` (t, n) the elastic tip response at σ."""
+
+    blocks: np.ndarray
+    static: np.ndarray
+
+
+def _train(model: _Projected, train_u, train_p, options: ReductionOptions) -> _Snapshots:
+    """Solve the component model at every training point.
+
+    Points are visited outwards from the centre of the search space, each starting from
+    the nearest point already solved, so every inverse iteration starts close.
+    """
+    solver = _Solver(model, options)
+    centre = P_LOWER + 0.5 * (P_UPPER - P_LOWER)
+    K, M = solver.matrices(centre)
+    _, modes = sla.eigh(K.real, M, subset_by_index=[2, 1 + options.block])
+    keys = train_u * _SHAPE_WEIGHTS
+    order = np.argsort(np.linalg.norm(keys - 0.5 * _SHAPE_WEIGHTS, axis=1))
+    n, b, t = model.n, options.block, len(train_p)
+    blocks = np.zeros((t, n, b), dtype=complex)
+    static = np.zeros((t, n), dtype=complex)
+    done = np.zeros(t, dtype=bool)
+    for i in order:
+        if done.any():
+            solved = np.flatnonzero(done)
+            nearest = solved[np.argmin(np.linalg.norm(keys[solved] - keys[i], axis=1))]
+            start = blocks[nearest]
+        else:
+            start = modes
+        sol = solver.solve(train_p[i], start)
+        blocks[i] = sol.vectors[:, :b]
+        static[i] = sol.static
+        done[i] = True
+    return _Snapshots(blocks, static)
+
+
+def _pod_basis(model: _Projected, snaps: _Snapshots, n_holder_dofs: int, V, tolerance: float):
+    """Per-body POD of the training solutions plus the exact rigid motions.
+
+    Returns Q (n, r), orthonormal, and the rigid motions t, r in Q coordinates (r, 2).
+    """
+    # Component coordinates of each body: the first columns of V belong to the holder.
+    n_hcols = int(np.count_nonzero(np.any(V[:n_holder_dofs] != 0, axis=0)))
+    data = np.concatenate([snaps.blocks.transpose(1, 0, 2).reshape(model.n, -1), snaps.static.T], axis=1)
+    data = np.concatenate([data.real, data.imag], axis=1)
+    data /= np.maximum(np.linalg.norm(data, axis=0), 1e-300)
+    columns = []
+    for rows in (slice(0, n_hcols), slice(n_hcols, model.n)):
+        part = data[rows]
+        rig = model.rigid[rows]
+        rig_q, _ = np.linalg.qr(rig)
+        # The rigid motions are kept exactly; POD describes what is left.
+        part = part - rig_q @ (rig_q.T @ part)
+        u, s, _ = np.linalg.svd(part, full_matrices=False)
+        keep = u[:, s > tolerance * s[0]]
+        block = np.zeros((model.n, rig_q.shape[1] + keep.shape[1]))
+        block[rows] = np.hstack([rig_q, keep])
+        columns.append(block)
+    Q = np.hstack(columns)
+    return Q, Q.T @ model.rigid

@@ -1,0 +1,124 @@
+"""The fast reduced evaluator reproduces the full converged model over the whole search space.
+
+Accuracy required of the optimiser's evaluator (MODEL.md §7.5, §8.1, §8.4), measured on
+seeded Latin-hypercube points and corners of the bounds of p:
+  * f1–f3 within 0.01 % of the full model;
+  * ζ1 within 0.5 %;
+  * |H_tt| on the 201-point, 1 Hz objective window centred on f1 within 0.5 % of the
+    window's largest |H_tt| (the objective normalises by that peak).
+The reference is the full model: ARPACK modes and the direct (one LU per frequency)
+tip receptance.
+"""
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from taptune.io.assembly import load_assembly
+from taptune.model import build_model, solve_modes, tip_receptance
+from taptune.model.params import NOMINAL, P_LOWER, P_UPPER, HolderParams, from_p, to_p
+from taptune.model.reduced import BatchEvaluation, Evaluation, FastEvaluator
+
+ASSETS = Path(__file__).resolve().parents[2] / "assets"
+F_TOL, ZETA_TOL, H_TOL = 1e-4, 5e-3, 5e-3
+WINDOW = np.arange(-100.0, 101.0)  # the objective's shape window around f1 [Hz]
+
+
+def sample(n_lhs: int, n_corners: int, seed: int) -> np.ndarray:
+    """Seeded points of p: a Latin hypercube and randomly chosen corners of the bounds, (n, 7)."""
+    rng = np.random.default_rng(seed)
+    strata = np.stack([rng.permutation(n_lhs) for _ in range(7)], axis=1)
+    lhs = (strata + rng.random((n_lhs, 7))) / n_lhs
+    corners = np.array(list(itertools.product((0.0, 1.0), repeat=7)))
+    u = np.vstack([lhs, corners[rng.permutation(len(corners))[:n_corners]]])
+    return P_LOWER + u * (P_UPPER - P_LOWER)
+
+
+def worst_errors(fe, evaluator, points) -> np.ndarray:
+    """Largest relative errors (f1–f3, ζ1, |H| in the window) of the evaluator over the points."""
+    worst = np.zeros(3)
+    for p in points:
+        params = from_p(p)
+        modes = solve_modes(fe, params, n_modes=3)
+        window = modes.frequency_hz[0] + WINDOW
+        h_full = tip_receptance(fe, params, window, method="direct")
+        e = evaluator.evaluate(p, window)
+        errors = [
+            np.max(np.abs(e.bending_hz / modes.frequency_hz[:3] - 1)),
+            abs(e.damping_ratio[0] / modes.damping_ratio[0] - 1),
+            np.max(np.abs(np.abs(e.tip_receptance) - np.abs(h_full))) / np.max(np.abs(h_full)),
+        ]
+        worst = np.maximum(worst, errors)
+    return worst
+
+
+def assemblies(reference_assembly):
+    return {
+        "reference": reference_assembly,
+        "er32_d6": load_assembly(ASSETS / "er32_hsk63_d6.toml"),
+        "shrinkfit_d12": load_assembly(ASSETS / "shrinkfit_hsk63_d12.toml"),
+        "hydraulic_d20": load_assembly(ASSETS / "hydraulic_hsk63_d20.toml"),
+    }
+
+
+@pytest.mark.parametrize("name, seed", [("reference", 1), ("er32_d6", 2), ("shrinkfit_d12", 3)])
+def test_reduced_model_matches_the_full_model_on_lhs_points_and_corners(reference_assembly, name, seed):
+    """f1–f3 to 0.01 %, ζ1 to 0.5 %, |H| in the 200 Hz window to 0.5 % of its peak, on 10
+    Latin-hypercube points and 6 corners of the search space (stiff, soft, lossy, loss-free)."""
+    fe = build_model(assemblies(reference_assembly)[name])
+    ev = FastEvaluator.from_model(fe)
+    worst = worst_errors(fe, ev, sample(10, 6, seed))
+    assert worst[0] < F_TOL and worst[1] < ZETA_TOL and worst[2] < H_TOL, worst
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["reference", "er32_d6", "shrinkfit_d12", "hydraulic_d20"])
+def test_reduced_model_matches_the_full_model_on_a_large_sweep(reference_assembly, name):
+    """The same tolerances on 150 Latin-hypercube points and all 128 corners per assembly."""
+    fe = build_model(assemblies(reference_assembly)[name])
+    ev = FastEvaluator.from_model(fe)
+    worst = worst_errors(fe, ev, sample(150, 128, 100))
+    assert worst[0] < F_TOL and worst[1] < ZETA_TOL and worst[2] < H_TOL, worst
+
+
+def test_holder_A_matches_the_converged_table(reference_assembly):
+    """MODEL.md §13.4: holder A at 53.5 mm, 4685.8 / 14934.8 / 19891.9 Hz, ζ1 = 0.391 %,
+    H_tt(1000 Hz) ≈ −9.178e-8 − 2.25e-10 i m/N (rigid-body terms included)."""
+    holder_a = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.0)
+    ev = FastEvaluator(reference_assembly)
+    e = ev.evaluate(to_p(holder_a), [1000.0])
+    assert np.allclose(e.bending_hz, [4685.8, 14934.8, 19891.9], rtol=5e-4)
+    assert e.damping_ratio[0] == pytest.approx(0.00391, rel=0.02)
+    assert e.tip_receptance[0].real == pytest.approx(-9.178e-8, rel=1e-3)
+    assert e.tip_receptance[0].imag == pytest.approx(-2.25e-10, rel=0.02)
+
+
+def test_evaluate_many_equals_evaluate_and_the_build_is_deterministic(reference_assembly):
+    """The batch form gives the single results; two builds give identical numbers."""
+    fe = build_model(reference_assembly)
+    ev, again = FastEvaluator.from_model(fe), FastEvaluator.from_model(fe)
+    P = sample(4, 2, 9)
+    window = 4800.0 + WINDOW
+    batch = ev.evaluate_many(P, window)
+    assert isinstance(batch, BatchEvaluation) and len(batch) == len(P)
+    assert batch.tip_receptance.shape == (len(P), len(window))
+    for i, p in enumerate(P):
+        single = ev.evaluate(p, window)
+        assert isinstance(single, Evaluation)
+        assert single.bending_hz.shape == (3,) and single.damping_ratio.shape == (3,)
+        np.testing.assert_allclose(batch[i].bending_hz, single.bending_hz, rtol=1e-12)
+        np.testing.assert_allclose(batch[i].tip_receptance, single.tip_receptance, rtol=1e-10)
+        np.testing.assert_array_equal(again.evaluate(p, window).tip_receptance, single.tip_receptance)
+
+
+def test_low_frequency_receptance_is_the_rigid_body_mass_line(reference_assembly):
+    """Far below mode 1 the free-free tip receptance tends to −(1/m + d²/J)/ω² (MODEL.md §13.3):
+    the reduced model keeps the exact rigid-body terms."""
+    fe = build_model(reference_assembly)
+    ev = FastEvaluator.from_model(fe)
+    p = to_p(NOMINAL)
+    h_full = tip_receptance(fe, NOMINAL, [5.0, 50.0], method="direct")
+    h = ev.evaluate(p, [5.0, 50.0]).tip_receptance
+    np.testing.assert_allclose(h, h_full, rtol=1e-6)
