@@ -88,7 +88,7 @@ def main(argv=None) -> int:
     print(f"holder er32_d16 (true parameters from {TRUTH.name}); recorded at {args.recorded} mm; "
           f"predicted at {args.target:g} mm")
     print(f"truth at {args.target:g} mm: f1–f3 = {', '.join(f'{f:.1f}' for f in truth)} Hz\n")
-    header = (f"{'seed':>4}  {'fit':<16} {'f1 ± spread [Hz]':>18} {'f2 ± spread [Hz]':>18} {'f3 ± spread [Hz]':>18}"
+    header = (f"{'seed':>4}  {'fit':<22} {'f1 ± spread [Hz]':>18} {'f2 ± spread [Hz]':>18} {'f3 ± spread [Hz]':>18}"
               f"  {'err f1/f2/f3 [%]':>20}  {'spread f1/f2/f3 [%]':>21}  {'s':>5}")
     print(header)
     print("-" * len(header))
@@ -107,7 +107,7 @@ def main(argv=None) -> int:
                 rel_spread = 100 * spread / truth
                 summary.setdefault(label.split()[0], []).append((np.abs(err), rel_spread))
                 cells = "".join(f"{fi:>11.1f} ± {si:<5.1f}" for fi, si in zip(f, spread))
-                print(f"{seed:>4}  {label:<16} {cells}  {'/'.join(f'{e:+.2f}' for e in err):>20}  "
+                print(f"{seed:>4}  {label:<22} {cells}  {'/'.join(f'{e:+.2f}' for e in err):>20}  "
                       f"{'/'.join(f'{s:.2f}' for s in rel_spread):>21}  {seconds:5.0f}")
     print("\nmean over seeds (and single recordings): |error| and ± spread in % of the truth, f1/f2/f3")
     for kind, values in summary.items():
