@@ -179,3 +179,19 @@ def test_stubby_sections_get_elements_shorter_than_a_fortieth_of_the_wavelength(
     seg = np.searchsorted(bounds, 0.5 * (h.z[:-1] + h.z[1:])) - 1
     assert np.all(h.length <= lam[seg] / 40 + 1e-12)
     assert np.allclose(fe.z_holder, h.z)
+
+
+def test_explicit_tool_segments_give_the_same_model_as_shank_and_flute_keys(reference_toml, tmp_path):
+    """ASSEMBLY-FORMAT.md: segments [61.5 × Ø16, 32 × Ø12.8] are the reference tool written out."""
+    from taptune.io.assembly import load_assembly
+    from taptune.model.modes import solve_modes
+
+    text = reference_toml.read_text().replace(
+        "shank_diameter = 16.0\nflute_length = 32.0\nflute_diameter = 16.0\n",
+        "segments = [ { length = 61.5, od = 16.0 }, { length = 32.0, od = 12.8 } ]\n",
+    )
+    path = tmp_path / "segments.toml"
+    path.write_text(text)
+    a = solve_modes(build_model(load_assembly(reference_toml)), HOLDER_A, 3).frequency_hz
+    b = solve_modes(build_model(load_assembly(path)), HOLDER_A, 3).frequency_hz
+    assert np.allclose(a, b, rtol=1e-9)
