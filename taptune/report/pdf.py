@@ -25,15 +25,9 @@ PAGE_SIZE_IN = (11.69, 8.27)  # A4 landscape
 STICKOUT_OFFSETS_MM = (-20.0, -10.0, 0.0, 10.0, 20.0)
 SUMMARY_ROWS_PER_PAGE = 28
 _SPREAD_FORMAT = "{:.2g}"
-_PARAM_ROWS = (  # name, label, unit, format
-    ("k_tt", "k_tt", "N/m/mm", "{:.4g}"),
-    ("k_rr", "k_rr", "N·m/rad/mm", "{:.4g}"),
-    ("eta_tt", "η_tt", "1/mm", "{:.3g}"),
-    ("eta_rr", "η_rr", "1/mm", "{:.3g}"),
-    ("alpha", "α", "%", "{:+.2f}"),
-    ("density_factor", "ρ factor", "–", "{:.4f}"),
-    ("modulus_factor", "E factor", "–", "{:.4f}"),
-)
+# Symbols of the parameters on the page; values print with 4 significant digits unless set here.
+_SYMBOLS = {"eta_tt": "η_tt", "eta_rr": "η_rr", "alpha": "α", "density_factor": "ρ factor", "modulus_factor": "E factor"}
+_FORMATS = {"eta_tt": "{:.3g}", "eta_rr": "{:.3g}", "alpha": "{:+.2f}", "density_factor": "{:.4f}", "modulus_factor": "{:.4f}"}
 
 
 @dataclass(frozen=True)
@@ -163,11 +157,15 @@ def _table(ax, cells, header, col_widths, title: str, font: float = 8.5, left=(0
 
 
 def parameter_cells(result) -> list[list[str]]:
-    """Rows (parameter, value, ± spread, unit) of the parameter table."""
+    """Rows (parameter, value, ± spread, unit) of the parameter table, in :data:`NAMES` order."""
+    from taptune.library.schema import PARAM_UNITS
+    from taptune.model.params import NAMES
+
     spread = result.param_spread
     return [
-        [label, fmt.format(getattr(result.params, name)), "± " + _SPREAD_FORMAT.format(spread[name]), unit]
-        for name, label, unit, fmt in _PARAM_ROWS
+        [_SYMBOLS.get(name, name), _FORMATS.get(name, "{:.4g}").format(getattr(result.params, name)),
+         "± " + _SPREAD_FORMAT.format(spread[name]), PARAM_UNITS[name]]
+        for name in NAMES
     ]
 
 
