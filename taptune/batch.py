@@ -148,6 +148,7 @@ class BatchOptions:
     generations: int | None = None
     polish_evaluations: int | None = None
     keep_pages: bool = False  # return what a PDF report needs (BatchResult.pages)
+    timeout_s: float | None = None  # a job running longer is stopped and marked "error"
 
     def identify_options(self):
         """IdentifyOptions for one worker: one process each (a pool worker may not fork a pool)."""
@@ -590,6 +591,7 @@ def _context():
 class _Running:
     process: object
     items: tuple
+    started: float
     fraction: float = 0.0
 
 
@@ -599,12 +601,17 @@ def _died(run: _Running) -> Outcome:
     return Outcome(tuple(_rows_for(run.items, "error", f"the worker process ended without a result ({how})")))
 
 
+def _timed_out(run: _Running, timeout_s: float) -> Outcome:
+    message = f"stopped after {timeout_s:g} s (--timeout); the identification did not finish"
+    return Outcome(tuple(_rows_for(run.items, "error", message, time.monotonic() - run.started)))
+
+
 def run_jobs(jobs, options: BatchOptions, on_outcome: Callable[[Outcome], None],
              progress: Callable[[float], None] | None = None) -> bool:
     """Run each job in its own process, at most ``options.worker_count`` at once.
 
-    ``on_outcome`` gets each job's :class:`Outcome` as it finishes (a worker that dies
-    gives "error" rows). Returns False if interrupted by ``KeyboardInterrupt`` (running
+    ``on_outcome`` gets each job's :class:`Outcome` as it finishes (a worker that dies,
+    or runs longer than ``options.timeout_s``, gives "error" rows). Returns False if interrupted by ``KeyboardInterrupt`` (running
     workers are terminated; jobs not finished get no outcome).
     """
     ctx = _context()
@@ -620,7 +627,7 @@ def run_jobs(jobs, options: BatchOptions, on_outcome: Callable[[Outcome], None],
                 process = ctx.Process(target=_worker_main, args=(items, options, send), daemon=True)
                 process.start()
                 send.close()  # our copy: EOF on `receive` then means the worker is gone
-                running[receive] = _Running(process, items)
+                running[receive] = _Running(process, items, time.monotonic())
             for conn in wait_any(list(running), timeout=0.5):
                 run = running[conn]
                 try:
@@ -635,6 +642,15 @@ def run_jobs(jobs, options: BatchOptions, on_outcome: Callable[[Outcome], None],
                 run.process.join()
                 finished += 1
                 on_outcome(payload if payload is not None else _died(run))
+            if options.timeout_s is not None:
+                for conn, run in list(running.items()):
+                    if time.monotonic() - run.started > options.timeout_s:
+                        run.process.terminate()
+                        run.process.join()
+                        del running[conn]
+                        conn.close()
+                        finished += 1
+                        on_outcome(_timed_out(run, options.timeout_s))
             if progress is not None:
                 total = finished + len(running) + len(pending)
                 progress((finished + sum(r.fraction for r in running.values())) / max(total, 1))

@@ -193,6 +193,30 @@ def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monk
     assert result.exit_status == 1
 
 
+def test_a_job_over_the_timeout_is_stopped_and_the_others_finish(tmp_path, monkeypatch):
+    import time
+
+    import taptune.batch as batch
+
+    for stem in ("a", "b"):
+        (tmp_path / f"{stem}.wav").write_bytes(b"x")
+        (tmp_path / f"{stem}.toml").write_text(assembly_text(stem))
+    real = batch.run_job
+
+    def hang_on_a(items, options, progress=None):
+        if items[0].path.name == "a.wav":
+            time.sleep(60)
+        return real(items, options, progress)
+
+    monkeypatch.setattr(batch, "run_job", hang_on_a)
+    t0 = time.monotonic()
+    result = run_batch([tmp_path], tiny(tmp_path, timeout_s=1.0))
+    assert time.monotonic() - t0 < 30
+    by_name = {Path(r.file).name: r for r in result.rows}
+    assert by_name["a.wav"].status == "error" and "stopped after 1 s" in by_name["a.wav"].message
+    assert by_name["b.wav"].status == "failed"
+
+
 def test_an_unexpected_exception_is_one_line_and_its_traceback_goes_to_the_log(tmp_path, monkeypatch):
     import taptune.identify.pipeline as pipeline
 

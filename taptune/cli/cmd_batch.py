@@ -1,4 +1,4 @@
-"""``taptune batch PATH... [--assembly FILE] [--jobs N] [--out DIR] [--library PATH] [--force] [--joint] [--report PDF] [--seed N]``."""
+"""``taptune batch PATH... [--assembly FILE] [--jobs N] [--out DIR] [--library PATH] [--force] [--joint] [--report PDF] [--seed N] [--no-save] [--timeout S]``."""
 
 from __future__ import annotations
 
@@ -26,6 +26,8 @@ def add_parser(sub, name, help_text):
     p.add_argument("--report", metavar="PDF", help="write a PDF: a summary table, then one page per identified recording")
     p.add_argument("--seed", type=int, default=0, help="random seed of every fit (default 0)")
     p.add_argument("--no-save", action="store_true", help="do not store the holders in the library")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="stop a recording's identification after S seconds and mark it 'error' (default: no limit)")
     # Optimiser budget: for tests and quick looks, not for real identifications.
     p.add_argument("--population", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--generations", type=int, default=None, help=argparse.SUPPRESS)
@@ -37,6 +39,8 @@ def _check(args) -> None:
     from taptune.cli.common import output_path
     from taptune.errors import InputError
 
+    if args.timeout is not None and not args.timeout > 0:
+        raise InputError(f"--timeout must be > 0 s, got {args.timeout:g}")
     for flag in ("jobs", "population", "generations", "polish_evaluations"):
         value = getattr(args, flag)
         if value is not None and value < 1:
@@ -80,7 +84,7 @@ def run(args) -> int:
     options = BatchOptions(
         out_dir=Path(args.out), library=args.library, jobs=args.jobs, seed=args.seed, force=args.force,
         joint=args.joint, save=not args.no_save, population=args.population, generations=args.generations,
-        polish_evaluations=args.polish_evaluations,
+        polish_evaluations=args.polish_evaluations, timeout_s=args.timeout,
         keep_pages=bool(args.report),
     )
     bar = ProgressBar("batch")
