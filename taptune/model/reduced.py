@@ -47,7 +47,7 @@ from taptune.model.params import ETA_REFERENCE_MM, LOG_PARAMS, P_LOWER, P_UPPER
 # regular although the model is free-free (the same shift as the full model's solver).
 SIGMA = -((2 * np.pi * 200.0) ** 2)
 TWO_PI = 2 * np.pi
-# Affine pieces in the order of the coefficient vector of _stiffness_coefficients.
+# Affine pieces in the order of the coefficient vector of stiffness_coefficients.
 _K_PIECES = ("K_tool", "K_holder", "T0", "T1", "R0", "R1")
 
 
@@ -133,18 +133,19 @@ class BatchEvaluation:
         return Evaluation(self.bending_hz[i], self.damping_ratio[i], self.tip_receptance[i], int(self.iterations[i]))
 
 
-def stiffness_coefficients(p) -> np.ndarray:
-    """Coefficients of (K_tool, K_holder, T0, T1, R0, R1) in K̃(p), complex, shape (6,).
+def stiffness_coefficients(p) -> list[complex]:
+    """Coefficients of (K_tool, K_holder, T0, T1, R0, R1) in K̃(p), six complex numbers.
 
     p is the optimiser's vector of MODEL.md §8.1 (log10 of the four intensities, alpha
     [%], density factor, modulus factor); the contact intensities per mm become line
-    stiffnesses per metre (× 1e3), as in :attr:`HolderParams.c_t`.
+    stiffnesses per metre (× 1e3), as in :attr:`HolderParams.c_t`. Plain Python
+    arithmetic: this runs once per candidate, where numpy's per-call cost would dominate.
     """
-    k_tt, k_rr, eta_tt, eta_rr = 10.0 ** np.asarray(p[:LOG_PARAMS], dtype=float)
-    a = p[4] / 100.0
-    c_t = k_tt * 1e3 * (1 + 1j * eta_tt * ETA_REFERENCE_MM)
-    c_r = k_rr * 1e3 * (1 + 1j * eta_rr * ETA_REFERENCE_MM)
-    return np.array([1.0, p[6], c_t, c_t * a, c_r, c_r * a], dtype=complex)
+    lg_kt, lg_kr, lg_et, lg_er, alpha, _, modulus = (float(v) for v in p[:7])
+    c_t = 10.0**lg_kt * 1e3 * complex(1.0, 10.0**lg_et * ETA_REFERENCE_MM)
+    c_r = 10.0**lg_kr * 1e3 * complex(1.0, 10.0**lg_er * ETA_REFERENCE_MM)
+    a = alpha / 100.0
+    return [1.0, modulus, c_t, c_t * a, c_r, c_r * a]
 
 
 # --------------------------------------------------------------------------- component basis
@@ -270,7 +271,8 @@ class _Solution:
     tip_modal: np.ndarray  # (k,) φ_tip
     rigid_tip: float  # Σ_rigid ψ_tip² (M-orthonormal rigid-body pair)
     residual: complex  # static contribution of all other modes at σ
-    static: np.ndarray  # (n,) elastic part of (K̃ − σM)⁻¹ e_tip
+    static: np.ndarray  # (n,) (K̃ − σM)⁻¹ e_tip
+    deflation: np.ndarray  # (n, 2) W with x − R Wᵀx the rigid-body deflation
     iterations: int
 
     @property
@@ -292,6 +294,11 @@ class _Solver:
         n = model.n
         self.n = n
         self.k_flat = model.k_pieces.reshape(len(_K_PIECES), n * n)
+        # K̃ − σM in one product: the pieces of K̃, then −σ·M_tool (coefficient 1, folded
+        # into K_tool) and −σ·M_holder (coefficient = density factor).
+        shifted = self.k_flat.copy()
+        shifted[0] -= SIGMA * model.m_tool.ravel()
+        self.a_flat = np.vstack([shifted, -SIGMA * model.m_holder.ravel()])
         # Complex copies: complex @ complex is faster in numpy than real @ complex.
         self.m_tool = model.m_tool.astype(complex)
         self.m_holder = model.m_holder.astype(complex)
@@ -300,44 +307,53 @@ class _Solver:
         # M(p) R and Rᵀ M(p) R are affine in the density factor too.
         self.mr_tool = model.m_tool @ R
         self.mr_holder = model.m_holder @ R
-        self.g_tool = R.T @ self.mr_tool
-        self.g_holder = R.T @ self.mr_holder
+        self.g_tool = (R.T @ self.mr_tool).ravel().tolist()
+        self.g_holder = (R.T @ self.mr_holder).ravel().tolist()
         self.tip = model.tip.astype(complex)
-        self.tip_rigid = model.tip @ R
+        self.tip_rigid = (model.tip @ R).tolist()
 
     def matrices(self, p):
         """(K̃(p), M(p)) of the projected model, both complex (n, n)."""
-        K = (stiffness_coefficients(p) @ self.k_flat).reshape(self.n, self.n)
+        K = (np.array(stiffness_coefficients(p)) @ self.k_flat).reshape(self.n, self.n)
         return K, self.m_tool + p[5] * self.m_holder
 
-    def solve(self, p, start: np.ndarray) -> _Solution:
+    def solve(self, p, start: np.ndarray, start_lam: np.ndarray) -> _Solution:
+        """Modes of the candidate p from the start block (n, b) with its Ritz values (b,)."""
         opt = self.options
-        df = p[5]
-        K, M = self.matrices(p)
-        lu, piv, info = zgetrf(K - SIGMA * M)
+        n = self.n
+        df = float(p[5])
+        coef = stiffness_coefficients(p)
+        coef.append(df)
+        A = (np.array(coef) @ self.a_flat).reshape(n, n)
+        M = self.m_tool + df * self.m_holder
+        lu, piv, info = zgetrf(A)
         if info != 0:
             raise np.linalg.LinAlgError(f"K̃ − σM is singular for p = {np.asarray(p)}")
-        gram_inv = np.linalg.inv(self.g_tool + df * self.g_holder)
         # Rigid-body deflation X − R (RᵀMR)⁻¹ RᵀM X: inverse iteration at σ < 0 would
-        # otherwise amplify any rigid component above every elastic mode.
+        # otherwise amplify any rigid component above every elastic mode. (RᵀMR)⁻¹ is 2×2.
+        g00, g01, _, g11 = (t + df * h for t, h in zip(self.g_tool, self.g_holder))
+        det = g00 * g11 - g01 * g01
+        gram_inv = np.array([[g11, -g01], [-g01, g00]]) / det
         proj = (self.mr_tool + df * self.mr_holder) @ gram_inv
         R = self.rigid
-        static, _ = zgetrs(lu, piv, self.tip)
-        tip_static = self.tip @ static
-        rigid_tip = float(self.tip_rigid @ gram_inv @ self.tip_rigid)
+        t0, t1 = self.tip_rigid
+        rigid_tip = (g11 * t0 * t0 - 2 * g01 * t0 * t1 + g00 * t1 * t1) / det
         X = start
+        # Inverse iteration divides mode j by about (λ_j − σ); undoing that keeps the
+        # columns at comparable size for the Ritz step (no QR needed).
+        scale = start_lam - SIGMA
         iterations = 0
         while True:
             X, _ = zgetrs(lu, piv, M @ X)
             X -= R @ (proj.T @ X)
+            X *= scale
             iterations += 1
             if iterations < opt.min_iterations:
                 continue
-            # Column scaling only: the Ritz step re-orthogonalises every iteration, so the
-            # columns never get the chance to collapse onto mode 1.
-            X /= np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
-            KX, MX = K @ X, M @ X
+            MX = M @ X
             mr = X.T @ MX
+            # K̃X = (K̃ − σM)X + σMX
+            KX = A @ X + SIGMA * MX
             lam, Z = _eig_small(X.T @ KX, mr)
             Z /= np.sqrt(np.einsum("ij,ij->j", Z, mr @ Z))
             # Relative residual ‖K̃φ − λMφ‖ / ‖K̃φ‖ of modes 1–3.
@@ -347,18 +363,20 @@ class _Solver:
             if rel2.max() < opt.tol**2:
                 break
             if iterations >= opt.max_iterations:
-                lam, X, Z = self._dense(K, M, proj)
+                lam, X, Z = self._dense(A, M, proj)
                 iterations = 0
                 break
             X = X @ Z
+            scale = lam - SIGMA
+        static, _ = zgetrs(lu, piv, self.tip)
         phi_tip = (self.tip @ X) @ Z
-        residual = tip_static - rigid_tip / (-SIGMA) - np.sum(phi_tip**2 / (lam - SIGMA))
-        static -= R @ (proj.T @ static)
-        return _Solution(lam, X, Z, phi_tip, rigid_tip, residual, static, iterations)
+        residual = self.tip @ static - rigid_tip / (-SIGMA) - np.sum(phi_tip**2 / (lam - SIGMA))
+        return _Solution(lam, X, Z, phi_tip, rigid_tip, residual, static, proj, iterations)
 
-    def _dense(self, K, M, proj):
+    def _dense(self, A, M, proj):
         """All elastic modes of the reduced model (slow path for a non-converging candidate)."""
-        lam, vec = sla.eig(K, M)
+        lam, vec = sla.eig(A, M)
+        lam = lam + SIGMA
         order = np.argsort(lam.real)
         lam, vec = lam[order][2:], vec[:, order][:, 2:]
         vec -= self.rigid @ (proj.T @ vec)
@@ -439,18 +457,22 @@ class FastEvaluator:
         self.basis = V @ Q
         self.component_size = component.n
         self._solver = _Solver(self.model, reduction)
-        # Start blocks in the compressed coordinates (Q is orthonormal).
+        # Start blocks in the compressed coordinates (Q is orthonormal), with their
+        # Ritz values; the nearest training point by weighted distance ‖k − q‖², whose
+        # ‖k‖² part is precomputed.
         self._train_key = train_u * _SHAPE_WEIGHTS
+        self._train_key_sq = 0.5 * np.einsum("ij,ij->i", self._train_key, self._train_key)
         self._starts = np.einsum("ai,tab->tib", Q, snapshots.blocks, optimize=True)
+        self._start_lam = snapshots.lam
 
     @property
     def size(self) -> int:
         """Dimension of the reduced model."""
         return self.model.n
 
-    def _start(self, p) -> np.ndarray:
-        d = self._train_key - _unit(p) * _SHAPE_WEIGHTS
-        return self._starts[np.argmin(np.einsum("ij,ij->i", d, d))]
+    def _nearest(self, p) -> int:
+        """Index of the training point nearest p (weighted unit-cube distance)."""
+        return int(np.argmin(self._train_key_sq - self._train_key @ (_unit(p) * _SHAPE_WEIGHTS)))
 
     def evaluate(self, p, window_hz) -> Evaluation:
         """f1–f3, ζ1–ζ3 and the tip receptance on ``window_hz`` at parameter vector p.
@@ -467,7 +489,8 @@ class FastEvaluator:
         Evaluation
         """
         p = np.asarray(p, dtype=float)
-        sol = self._solver.solve(p, self._start(p))
+        i = self._nearest(p)
+        sol = self._solver.solve(p, self._starts[i], self._start_lam[i])
         w2 = (TWO_PI * np.asarray(window_hz, dtype=float)) ** 2
         h = sol.rigid_tip / (-w2) + (1.0 / (sol.lam[None, :] - w2[:, None])) @ (sol.tip_modal**2) + sol.residual
         lam = sol.lam[:3]
@@ -492,9 +515,11 @@ class FastEvaluator:
 @dataclass(frozen=True)
 class _Snapshots:
     """Training solutions in component coordinates: ``blocks`` (t, n, block) Ritz
-    vectors of modes 1 … block; ``static`` (t, n) the elastic tip response at σ."""
+    vectors of modes 1 … block, ``lam`` (t, block) their Ritz values; ``static`` (t, n)
+    the elastic tip response at σ."""
 
     blocks: np.ndarray
+    lam: np.ndarray
     static: np.ndarray
 
 
@@ -507,25 +532,27 @@ def _train(model: _Projected, train_u, train_p, options: ReductionOptions) -> _S
     solver = _Solver(model, options)
     centre = P_LOWER + 0.5 * (P_UPPER - P_LOWER)
     K, M = solver.matrices(centre)
-    _, modes = sla.eigh(K.real, M.real, subset_by_index=[2, 1 + options.block])
+    modes_lam, modes = sla.eigh(K.real, M.real, subset_by_index=[2, 1 + options.block])
     keys = train_u * _SHAPE_WEIGHTS
     order = np.argsort(np.linalg.norm(keys - 0.5 * _SHAPE_WEIGHTS, axis=1))
     n, b, t = model.n, options.block, len(train_p)
     blocks = np.zeros((t, n, b), dtype=complex)
+    lam = np.zeros((t, b), dtype=complex)
     static = np.zeros((t, n), dtype=complex)
     done = np.zeros(t, dtype=bool)
     for i in order:
         if done.any():
             solved = np.flatnonzero(done)
             nearest = solved[np.argmin(np.linalg.norm(keys[solved] - keys[i], axis=1))]
-            start = blocks[nearest]
+            start, start_lam = blocks[nearest], lam[nearest]
         else:
-            start = modes
-        sol = solver.solve(train_p[i], start)
+            start, start_lam = modes, modes_lam
+        sol = solver.solve(train_p[i], start, start_lam)
         blocks[i] = sol.vectors[:, :b]
-        static[i] = sol.static
+        lam[i] = sol.lam[:b]
+        static[i] = sol.static - solver.rigid @ (sol.deflation.T @ sol.static)
         done[i] = True
-    return _Snapshots(blocks, static)
+    return _Snapshots(blocks, lam, static)
 
 
 def _pod_basis(model: _Projected, snaps: _Snapshots, n_holder_dofs: int, V, tolerance: float):
