@@ -6,9 +6,12 @@ by the neighbouring modes, the background and the zero-padding grid, by up to a 
 0.01 % — as large as the accuracy we need. So each peak is refined by fitting the taps'
 *complex* spectra around it with the exact DFT of a decaying sinusoid (one pole shared
 by all taps, its own complex amplitude per tap) plus a complex linear background that
-absorbs the other modes' tails, reflections and the onset uncertainty. Variable
-projection leaves two nonlinear unknowns per pole: the damped frequency and the decay
-rate; the residues and the background come from a linear least-squares solve.
+absorbs the other modes' tails and the onset uncertainty. Variable projection leaves
+two nonlinear unknowns per pole: the damped frequency and the decay rate; the residues
+and the background come from a linear least-squares solve. Reflections (the sound's
+echo from the floor or a wall) are what is left: they skew wide peaks by up to a few
+0.1 %; :func:`refine_peaks` starts the segments after the early ones and models a late
+one explicitly (a delayed copy of every pole's column).
 
 Frequencies are reported as the model defines them (MODEL.md §13: ``sqrt(Re λ)/2π``
 of the eigenvalue λ = −s² of the pole s = −σ + iω_d): f = √(ω_d² − σ²)/2π and
@@ -18,6 +21,7 @@ of the eigenvalue λ = −s² of the pole s = −σ + iω_d): f = √(ω_d² −
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.signal import find_peaks
@@ -173,9 +177,10 @@ def half_power_width(freq_hz, mag, i: int, max_hz: float = 2000.0) -> float:
     return float(min(widths)) * df
 
 
-def _basis(freq_hz, fd, sig, sample_rate, f_c, w):
-    """Columns of one decaying sinusoid per pole (exact DFT) then 1 and (f − f_c)/w,
-    and the derivatives of the pole columns by fd [Hz] and σ [1/s]."""
+def _basis(freq_hz, fd, sig, sample_rate, f_c, w, delays=()):
+    """Columns of one decaying sinusoid per pole (exact DFT), the same delayed by each of
+    ``delays`` [s] (reflections), then 1 and (f − f_c)/w; the derivatives of the pole
+    columns by fd [Hz] and σ [1/s]; the delay factors exp(−i2πf·d), shape (m, r)."""
     f = np.asarray(freq_hz)[:, None]
     z = np.exp((-sig[None, :] + 2j * np.pi * (fd[None, :] - f)) / sample_rate)
     one_minus = 1.0 - z
@@ -184,17 +189,32 @@ def _basis(freq_hz, fd, sig, sample_rate, f_c, w):
     dz = z / (one_minus**2 * sample_rate**2)
     d_fd = dz * (2j * np.pi)
     d_sig = -dz
+    shifts = np.exp(-2j * np.pi * f * np.asarray(delays, dtype=np.float64)[None, :])
     bg = np.ones((f.shape[0], 2), dtype=complex)
     bg[:, 1] = (f[:, 0] - f_c) / w
-    return np.hstack([modes, bg]), d_fd, d_sig
+    cols = [modes] + [modes * shifts[:, r:r + 1] for r in range(shifts.shape[1])] + [bg]
+    return np.hstack(cols), d_fd, d_sig, shifts
+
+
+class PoleFit(NamedTuple):
+    """Result of :func:`fit_poles`."""
+
+    fd: np.ndarray        #: damped frequencies ω_d/2π [Hz], shape (j,)
+    sigma: np.ndarray     #: decay rates [1/s], shape (j,)
+    std_fd: np.ndarray    #: standard errors of fd [Hz] for uncorrelated bins, shape (j,)
+    ok: bool              #: converged inside the band with a decay rate in range
+    delays: tuple         #: reflection delays [s after the segment start], fitted
+    rss: float = np.inf   #: residual sum of squares (data scaled to peak 1)
+    dof: int = 0          #: residual degrees of freedom
 
 
 def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz: float,
-              max_iter: int = 40):
+              max_iter: int = 40, delays=(), fit_delays: bool = False) -> PoleFit:
     """Fit poles shared by all taps to complex spectra in the band [lo_hz, hi_hz].
 
-    Variable projection (the residues and background solved linearly for given poles)
-    with Kaufman's Jacobian and Levenberg-Marquardt steps on (fd, log σ).
+    Variable projection (residues and background solved linearly for given poles) with
+    Kaufman's Jacobian and Levenberg-Marquardt steps on (fd, log σ) and, optionally,
+    the reflection delays.
 
     Parameters
     ----------
@@ -210,18 +230,17 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
         Band fitted [Hz].
     max_iter : int
         Iteration limit.
+    delays : sequence of float
+        Arrival times [s after the segment start] of reflections inside the segment:
+        each adds a delayed copy of every pole's column with its own amplitude.
+    fit_delays : bool
+        Refine ``delays`` too (they are then starting values).
 
     Returns
     -------
-    fd : ndarray, shape (j,)
-        Damped frequencies ω_d/2π [Hz].
-    sigma : ndarray, shape (j,)
-        Decay rates [1/s].
-    std_fd : ndarray, shape (j,)
-        Standard error of ``fd`` [Hz] from the residual and the Jacobian, for
-        uncorrelated bins (multiply the variance by the zero-padding factor).
-    ok : bool
-        The fit converged inside the band with a decay rate in range.
+    PoleFit
+        ``std_fd`` assumes uncorrelated bins: multiply its variance by the zero-padding
+        factor.
     """
     f = np.asarray(freq_hz)
     sel = (f >= lo_hz) & (f <= hi_hz)
@@ -229,39 +248,58 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
     y = np.asarray(spec)[:, sel].T  # (m, k)
     f0 = np.atleast_1d(np.asarray(f0, dtype=np.float64))
     s0 = np.maximum(np.atleast_1d(np.asarray(sigma0, dtype=np.float64)), 1.0)
+    d0 = np.asarray(delays, dtype=np.float64).ravel()
     j = f0.size
-    fail = (f0, s0, np.full(j, np.inf), False)
+    n_del = d0.size
+    n_free = n_del if fit_delays else 0
+    fail = PoleFit(f0, s0, np.full(j, np.inf), False, tuple(d0))
     m, k = y.shape
-    n_lin = j + 2
+    n_lin = j * (1 + n_del) + 2
     if m < n_lin + 2:
         return fail
     f_c = 0.5 * (lo_hz + hi_hz)
     w = max(0.5 * (hi_hz - lo_hz), 1e-9)
     y = y / (np.max(np.abs(y)) + 1e-300)
+    ms = 1e-3  # delays move in ms
 
-    def evaluate(fd, sig, jac: bool):
-        b, d_fd, d_sig = _basis(fw, fd, sig, sample_rate, f_c, w)
+    def decode(theta):
+        dl = d0 + ms * theta[2 * j:] if n_free else d0
+        return f_c + w * theta[0:2 * j:2], np.exp(theta[1:2 * j:2]), dl
+
+    def evaluate(theta, jac: bool):
+        fd, sig, dl = decode(theta)
+        b, d_fd, d_sig, shifts = _basis(fw, fd, sig, sample_rate, f_c, w, dl)
         q, r_ = np.linalg.qr(b)
-        c = np.linalg.solve(r_, q.conj().T @ y) if np.all(np.abs(np.diag(r_)) > 1e-300) else None
-        if c is None:
+        if not np.all(np.abs(np.diag(r_)) > 1e-300):
             return None, None
+        c = np.linalg.solve(r_, q.conj().T @ y)
         res = y - b @ c
         if not jac:
             return res, None
         cols = []
+
+        def add(v):
+            v = v - q @ (q.conj().T @ v)  # projected out of span(B)
+            cols.append(-np.concatenate([v.real.ravel(), v.imag.ravel()]))
+
         for p in range(j):
-            for d, scale in ((d_fd[:, p], w), (d_sig[:, p], sig[p])):
-                v = (d * scale)[:, None] * c[p][None, :]   # ∂B/∂θ · c, (m, k)
-                v = v - q @ (q.conj().T @ v)               # projected out of span(B)
-                cols.append(-np.concatenate([v.real.ravel(), v.imag.ravel()]))
+            # The pole's direct and delayed columns all move with it.
+            coef = np.broadcast_to(c[p][None, :], (m, k)).copy()
+            for r in range(n_del):
+                coef += shifts[:, r:r + 1] * c[j * (1 + r) + p][None, :]
+            add((d_fd[:, p] * w)[:, None] * coef)
+            add((d_sig[:, p] * sig[p])[:, None] * coef)
+        for r in range(n_free):
+            modes = b[:, j * (1 + r):j * (2 + r)]
+            add((-2j * np.pi * ms * fw)[:, None] * (modes @ c[j * (1 + r):j * (2 + r)]))
         return res, np.column_stack(cols)
 
-    # θ = (u, v): fd = f_c + w·u, σ = exp(v); parameters ordered (u1, v1, u2, v2, …).
-    theta = np.empty(2 * j)
-    theta[0::2] = (f0 - f_c) / w
-    theta[1::2] = np.log(s0)
+    # θ = (u1, v1, …, uj, vj, δ1 … δr): fd = f_c + w·u, σ = exp(v), delay = d0 + δ ms.
+    theta = np.zeros(2 * j + n_free)
+    theta[0:2 * j:2] = (f0 - f_c) / w
+    theta[1:2 * j:2] = np.log(s0)
     lam = 1e-3
-    res, jm = evaluate(f_c + w * theta[0::2], np.exp(theta[1::2]), True)
+    res, jm = evaluate(theta, True)
     if res is None:
         return fail
     cost = float(np.sum(np.abs(res) ** 2))
@@ -278,13 +316,14 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
                 lam *= 10
                 continue
             # Converged: the frequency would move by < 1e-6 of the half-band, the decay
-            # by < 1e-4 (relative).
-            if np.max(np.abs(step[0::2])) < 1e-6 and np.max(np.abs(step[1::2])) < 1e-4:
+            # by < 1e-4 (relative), a delay by < 0.1 µs.
+            if (np.max(np.abs(step[0:2 * j:2])) < 1e-6 and np.max(np.abs(step[1:2 * j:2])) < 1e-4
+                    and np.all(np.abs(step[2 * j:]) < 1e-4)):
                 converged = True
                 break
             trial = theta + step
-            trial[1::2] = np.clip(trial[1::2], -5.0, 30.0)
-            res_t, _ = evaluate(f_c + w * trial[0::2], np.exp(trial[1::2]), False)
+            trial[1:2 * j:2] = np.clip(trial[1:2 * j:2], -5.0, 30.0)
+            res_t, _ = evaluate(trial, False)
             if res_t is not None:
                 cost_t = float(np.sum(np.abs(res_t) ** 2))
                 if cost_t < cost:
@@ -295,23 +334,89 @@ def fit_poles(freq_hz, spec, sample_rate: float, f0, sigma0, lo_hz: float, hi_hz
             break
         theta, lam = trial, max(lam / 10, 1e-9)
         done = cost - cost_t <= 1e-10 * cost
-        res, jm = evaluate(f_c + w * theta[0::2], np.exp(theta[1::2]), True)
+        res, jm = evaluate(theta, True)
         cost = cost_t
         if done:
             break
-    fd = f_c + w * theta[0::2]
-    sig = np.exp(theta[1::2])
-    inside = (np.all(np.abs(theta[0::2]) < 0.98) and np.all(sig < 2 * np.pi * w * 4 + 10.0)
-              and np.all(sig > 0.05))
+    fd, sig, dl = decode(theta)
+    inside = (np.all(np.abs(theta[0:2 * j:2]) < 0.98) and np.all(sig < 2 * np.pi * w * 4 + 10.0)
+              and np.all(sig > 0.05) and np.all(dl > 0))
     n_res = 2 * m * k
-    n_par = 2 * j + 2 * k * n_lin
+    n_par = 2 * j + n_free + 2 * k * n_lin
     s2 = cost / max(n_res - n_par, 1)
     try:
         cov = s2 * np.linalg.pinv(jm.T @ jm)
-        std = w * np.sqrt(np.maximum(np.diag(cov)[0::2], 0.0))
+        std = w * np.sqrt(np.maximum(np.diag(cov)[0:2 * j:2], 0.0))
     except np.linalg.LinAlgError:
         std = np.full(j, np.inf)
-    return fd, sig, std, bool(inside)
+    return PoleFit(fd, sig, std, bool(inside), tuple(float(v) for v in dl), cost, max(n_res - n_par, 1))
+
+
+def reflection_profile(freq_hz, spec, sample_rate: float, fit: PoleFit, lo_hz: float, hi_hz: float,
+                       grid_s) -> np.ndarray:
+    """How much a reflection at each trial delay would explain, for fixed poles.
+
+    For each delay d of ``grid_s`` [s after the segment start] the poles' columns
+    delayed by d join the linear least squares (besides those of ``fit.delays``); the
+    drop of the residual, in units of the residual variance, comes back, shape of
+    ``grid_s`` (≈ the number of added parameters where there is no reflection).
+    """
+    f = np.asarray(freq_hz)
+    sel = (f >= lo_hz) & (f <= hi_hz)
+    fw = f[sel]
+    y = np.asarray(spec)[:, sel].T
+    j = fit.fd.size
+    f_c, w = 0.5 * (lo_hz + hi_hz), max(0.5 * (hi_hz - lo_hz), 1e-9)
+    b0, *_ = _basis(fw, fit.fd, fit.sigma, sample_rate, f_c, w, fit.delays)
+    modes = b0[:, :j]
+    q0, _ = np.linalg.qr(b0)
+    r0 = y - q0 @ (q0.conj().T @ y)
+    var = float(np.sum(np.abs(r0) ** 2)) / max(fit.dof, 1)
+    phase = np.exp(-2j * np.pi * np.outer(np.asarray(grid_s), fw))  # (g, m)
+    if j == 1:
+        # One pole: every trial column at once, projected out of span(B) by rows.
+        e = phase * modes[:, 0][None, :]
+        e = e - (e @ q0.conj()) @ q0.T
+        num = np.sum(np.abs(e.conj() @ r0) ** 2, axis=1)
+        drops = num / np.maximum(np.sum(np.abs(e) ** 2, axis=1), 1e-300)
+    else:
+        drops = np.zeros(len(grid_s))
+        for n in range(len(grid_s)):
+            e = modes * phase[n][:, None]
+            e = e - q0 @ (q0.conj().T @ e)
+            qe, _ = np.linalg.qr(e)
+            drops[n] = float(np.sum(np.abs(qe.conj().T @ r0) ** 2))
+    return drops / max(var, 1e-300)
+
+
+def with_reflection(freq_hz, spec, sample_rate: float, fit: PoleFit, lo_hz: float, hi_hz: float,
+                    max_delay_s: float, min_delay_s: float = 1e-3, count: int = 2,
+                    f_threshold: float = 15.0) -> PoleFit | None:
+    """The fit with one reflection added, when it explains significantly more; else None.
+
+    The few best trial delays of :func:`reflection_profile` (on a 0.2 ms grid from
+    ``min_delay_s`` to ``max_delay_s`` after the segment start) are fitted together with
+    the poles (delays free: with the poles still skewed by the reflection the best trial
+    delay can be off by a millisecond); the best is kept if its F statistic (residual
+    drop per added parameter over the residual variance, ≈ 1 without a reflection)
+    exceeds ``f_threshold``.
+    """
+    grid = np.arange(min_delay_s, max_delay_s, 0.2e-3)
+    if grid.size < 3:
+        return None
+    prof = reflection_profile(freq_hz, spec, sample_rate, fit, lo_hz, hi_hz, grid)
+    peak = np.flatnonzero((prof >= np.roll(prof, 1)) & (prof >= np.roll(prof, -1)))
+    peak = peak[np.argsort(prof[peak])[::-1][:count]]
+    best = None
+    for i in peak:
+        t = fit_poles(freq_hz, spec, sample_rate, fit.fd, fit.sigma, lo_hz, hi_hz,
+                      delays=fit.delays + (float(grid[i]),), fit_delays=True)
+        if t.ok and t.rss < fit.rss and (best is None or t.rss < best.rss):
+            best = t
+    if best is None:
+        return None
+    f_stat = ((fit.rss - best.rss) / max(fit.dof - best.dof, 1)) / (best.rss / best.dof)
+    return best if f_stat > f_threshold else None
 
 
 def undamped(fd_hz, sigma):
@@ -329,16 +434,22 @@ FIT_STARTS_S = (30e-3, 20e-3, 15e-3, 10e-3, 6e-3, 4e-3, 3e-3, 2e-3, 1.5e-3, 1e-3
 def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
                  seg_s: float, effort=None, quick_start_s: float = 1.5e-3,
                  snr_db=None, min_fit_snr_db: float = 10.0, starts_s=FIT_STARTS_S,
-                 target_rel_std: float = 1e-4, width_factor: float = 3.0,
-                 max_width_hz: float = 600.0):
+                 target_rel_std: float = 1e-4, noise_tradeoff: float = 2.0,
+                 width_factor: float = 3.0, max_reflection_s: float = 15e-3,
+                 reflection_start_s: float = 1.5e-3, max_width_hz: float = 600.0):
     """Refine picked peaks by pole fits; group peaks whose fit bands overlap.
 
     A reflection arriving ``d`` seconds after the tap multiplies the spectrum by
     ``1 + g exp(-iωd)``, which skews a wide peak by up to ~γ²·g·d (0.1 % for a 1 %
-    damped mode and a 1 ms, −12 dB reflection). After the last reflection has arrived
-    the signal is again a pure sum of decaying sinusoids, so each peak is fitted with
-    the latest segment start whose frequency standard error is still below
-    ``target_rel_std`` (the earliest start if none is).
+    damped mode and a 1 ms, −12 dB reflection). Two remedies, in this order:
+
+    * a late reflection (``reflection_start_s`` … ``max_reflection_s``) is sought in a
+      segment that starts after the early ones (:func:`with_reflection`); found, it is
+      modelled and that fit is the answer;
+    * otherwise, after the last reflection has arrived the signal is again a pure sum
+      of decaying sinusoids, so each peak is fitted with the latest segment start whose
+      frequency standard error is still below ``target_rel_std`` (or within
+      ``noise_tradeoff`` of the smallest).
 
     Parameters
     ----------
@@ -364,10 +475,17 @@ def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
         the noise is skipped: there the fit would lock onto noise.
     min_fit_snr_db : float
     target_rel_std : float
-        Largest acceptable relative standard error of a refined frequency; when no
-        start meets it, the latest start meeting 3, 10 times it, or the earliest.
+        Largest acceptable relative standard error of a refined frequency.
+    noise_tradeoff : float
+        When no start meets ``target_rel_std``, the latest start whose standard error
+        is at most this many times the smallest one is taken.
     width_factor : float
         Band half-width in half-power half-widths.
+    max_reflection_s : float
+        Latest reflection sought [s after the onset]; 0 = none.
+    reflection_start_s : float
+        Segment start of the reflection search [s after the onset], after the early
+        (floor, table) reflections.
     max_width_hz : float
         Widest band half-width [Hz].
 
@@ -414,28 +532,48 @@ def refine_peaks(freq_hz, mag, fit_spectra, sample_rate: float, idx, hz0, *,
         tried = [ts for ts in starts_s if ts <= t_max] or [min(starts_s)]
         if level == 1:
             tried = [quick_start_s]
-        fits = []
-        for ts in tried:
-            ff, spec, ovs = fit_spectra(ts)
-            fd, sig, sd, ok = fit_poles(ff, spec, sample_rate, f_start, s_start, band_lo, band_hi)
-            if not ok:
-                continue
-            fu, z = undamped(fd, sig)
-            sd = sd * np.sqrt(ovs)
+        def accept(fit, ovs):
+            """(f, ζ, std f) of a fit that refines these peaks, else None."""
+            if not fit.ok:
+                return None
+            fu, z = undamped(fit.fd, fit.sigma)
             # A fit that wandered to another peak, or to a noise spike much narrower than
             # the peak, is not a refinement of this one.
             near = np.abs(fu - hz[g]) < np.maximum(hw[g], 2.0 / seg_s)
-            if not np.all(near) or np.any(sig < 0.2 * s_decay):
+            if not np.all(near) or np.any(fit.sigma < 0.2 * s_decay):
+                return None
+            return fu, z, fit.std_fd * np.sqrt(ovs)
+
+        if level == 2 and max_reflection_s > reflection_start_s:
+            # A late reflection skews a wide peak by up to ~γ²·g·d whatever the start
+            # before it; found, it is modelled from an early start, which keeps the
+            # signal-to-noise ratio.
+            ff, spec, ovs = fit_spectra(reflection_start_s)
+            base = fit_poles(ff, spec, sample_rate, f_start, s_start, band_lo, band_hi)
+            found = with_reflection(ff, spec, sample_rate, base, band_lo, band_hi,
+                                    max_reflection_s - reflection_start_s) if base.ok else None
+            est = accept(found, ovs) if found is not None else None
+            if est is not None:
+                hz[g], zeta[g], std_hz[g] = est
                 continue
-            fits.append((fu, z, sd))
-            if np.all(sd <= target_rel_std * fu):
+        fits = []
+        for ts in tried:
+            ff, spec, ovs = fit_spectra(ts)
+            est = accept(fit_poles(ff, spec, sample_rate, f_start, s_start, band_lo, band_hi), ovs)
+            if est is None:
+                continue
+            fits.append(est)
+            if np.all(est[2] <= target_rel_std * est[0]):
                 break
-        # The latest start meeting the target; failing that, a looser one, and so on.
-        for tier in (1.0, 3.0, 10.0, np.inf):
-            ok_fits = [fit for fit in fits if np.all(fit[2] <= tier * target_rel_std * fit[0])]
-            if ok_fits:
-                hz[g], zeta[g], std_hz[g] = ok_fits[0]
-                break
+        if not fits:
+            continue
+        # The latest start meeting the target; failing that, the latest whose error is
+        # at most ``noise_tradeoff`` times the smallest: a reflection arriving between
+        # two starts skews the earlier fit by many standard errors (up to ~γ²·g·d),
+        # while starting later costs only a little noise.
+        rel = np.array([np.max(fit[2] / fit[0]) for fit in fits])
+        limit = max(target_rel_std, noise_tradeoff * float(np.min(rel)))
+        hz[g], zeta[g], std_hz[g] = fits[int(np.flatnonzero(rel <= limit)[0])]
     return hz, zeta, std_hz
 
 

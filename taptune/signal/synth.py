@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.signal import find_peaks
 
 from taptune.io.audio import Recording, make_recording
 
@@ -125,6 +126,41 @@ def _butter2(freq_hz, corner_hz, high: bool) -> np.ndarray:
     return 1 / (s**2 + np.sqrt(2) * s + 1)
 
 
+def without_rigid_body(freq_hz, receptance) -> np.ndarray:
+    """The receptance less its rigid-body part −a/ω² (a free-free body's mass line).
+
+    A free body pushed by the tap moves off as a whole; that motion radiates no sound
+    at audio frequencies but would dominate a synthesised signal. Below a quarter of the
+    first resonance ``H·ω² = −a + b·ω²`` (mass line plus static flexibility) gives ``a``
+    by least squares.
+
+    Parameters
+    ----------
+    freq_hz, receptance : ndarray, shape (m,)
+
+    Returns
+    -------
+    ndarray, shape (m,), complex
+    """
+    f = np.asarray(freq_hz, dtype=np.float64)
+    h = np.asarray(receptance, dtype=complex)
+    w2 = (2 * np.pi * f) ** 2
+    # The first resonance: the first peak of the accelerance above 20 Hz.
+    above = np.flatnonzero(f >= 20.0)
+    peaks, _ = find_peaks(np.abs(h[above]) * w2[above])
+    f1 = f[above[peaks[0]]] if peaks.size else f[-1]
+    low = (f >= 20.0) & (f < 0.25 * f1)
+    if np.count_nonzero(low) < 3:
+        return h
+    a = np.column_stack([np.ones(np.count_nonzero(low)), w2[low]])
+    coef, *_ = np.linalg.lstsq(a, (h[low] * w2[low]).astype(complex), rcond=None)
+    out = h.copy()
+    nz = w2 > 0
+    out[nz] = h[nz] - coef[0] / w2[nz]
+    out[~nz] = coef[1]
+    return out
+
+
 def tap_grid(sample_rate: int, ring_s: float = 1.0) -> np.ndarray:
     """The frequency grid [Hz] on which to give the receptance: rFFT bins of ``ring_s``.
 
@@ -135,12 +171,17 @@ def tap_grid(sample_rate: int, ring_s: float = 1.0) -> np.ndarray:
     return np.fft.rfftfreq(n, 1.0 / sample_rate)
 
 
-def _peak_of(freq_hz, spec) -> float:
-    return float(np.max(np.abs(spec))) if spec.size else 0.0
+def _peak_of(freq_hz, spec, f_min: float = 20.0) -> float:
+    """Height of the highest resonance peak of |spec| above ``f_min`` [Hz] (not the
+    rigid-body rise towards f = 0)."""
+    mag = np.abs(spec[freq_hz >= f_min])
+    idx, _ = find_peaks(mag)
+    return float(np.max(mag[idx])) if idx.size else float(np.max(mag, initial=0.0))
 
 
 def synthesize_recording(freq_hz, receptance, nuisances: Nuisances = Nuisances(), rng=None, *,
-                         extra_modes=(), path: str = "", f_ref_hz: float = 1000.0) -> Recording:
+                         extra_modes=(), path: str = "", f_ref_hz: float = 1000.0,
+                         rigid_body: str = "remove") -> Recording:
     """Synthesise a tap recording from a tip receptance and workshop nuisances.
 
     Parameters
@@ -157,11 +198,14 @@ def synthesize_recording(freq_hz, receptance, nuisances: Nuisances = Nuisances()
     extra_modes : sequence of (f_hz, zeta, rel_peak)
         Peaks that are not in the receptance (interface local modes, axial/torsional
         modes, table resonances): each is a mode whose peak in the radiated spectrum is
-        ``rel_peak`` times the highest peak of the receptance's.
+        ``rel_peak`` times the highest resonance peak of the receptance's.
     path : str
         Stored as the recording's path.
     f_ref_hz : float
         Reference frequency of the radiation tilt.
+    rigid_body : {"remove", "keep"}
+        Whether to take a free-free receptance's rigid-body mass line out first
+        (:func:`without_rigid_body`): it does not radiate but would swamp the signal.
 
     Returns
     -------
@@ -177,9 +221,11 @@ def synthesize_recording(freq_hz, receptance, nuisances: Nuisances = Nuisances()
         h = h_in.copy()
     else:
         h = np.interp(grid, f_in, h_in.real, left=0, right=0) + 1j * np.interp(grid, f_in, h_in.imag, left=0, right=0)
+    if rigid_body == "remove":
+        h = without_rigid_body(grid, h)
     tilt = (1j * grid / f_ref_hz) ** n_.radiation_exponent
     radiated = h * tilt
-    top = _peak_of(grid, radiated[grid > 50])
+    top = _peak_of(grid, radiated)
     for f, z, rel in extra_modes:
         one = modal_receptance(grid, [(f, z, 1.0)]) * tilt
         radiated = radiated + one * (rel * top / _peak_of(grid, one))
