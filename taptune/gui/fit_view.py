@@ -43,7 +43,7 @@ class FitView(QWidget):
         self.summary.setTextInteractionFlags(Qt.TextSelectableByMouse)
         tables = column(QLabel("Bending frequencies"), self.freq_table,
                         QLabel("Identified holder parameters (spread over the near-optimal fits)"),
-                        self.param_table, self.summary)
+                        self.param_table, self.summary, 1)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(hsplit(self.canvas, tables, (3, 2)))
@@ -70,6 +70,8 @@ class FitView(QWidget):
             ax.set_xlabel("frequency [Hz]")
             ax.set_ylabel("level, normalised to the peak")
             ax.set_title(title or "Around bending mode 1", loc="left")
+            ax.text(0.01, 0.98, "the window the fit compares:\nf1 ± 100 Hz", transform=ax.transAxes,
+                    va="top", ha="left", fontsize=8, color="#555555")
             ax.legend(loc="upper right", framealpha=0.9)
         self.canvas.draw_idle()
 

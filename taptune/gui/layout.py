@@ -27,6 +27,9 @@ def read_only_table(rows: int, headers: list[str]) -> QTableWidget:
     table.setEditTriggers(QAbstractItemView.NoEditTriggers)
     table.setSelectionMode(QAbstractItemView.NoSelection)
     table.verticalHeader().setDefaultSectionSize(22)
+    # Exactly as tall as its rows: no empty grid below the numbers.
+    table.setFixedHeight(table.horizontalHeader().sizeHint().height() + rows * 22 + 2 * table.frameWidth() + 2)
+    table.setVerticalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
     return table
 
 

@@ -91,7 +91,6 @@ class Predictor(QWidget):
         row.addWidget(self.spin)
 
         self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ % (± spread)"])
-        self.table.setFixedHeight(4 * 23 + 4)
         self.table.setMinimumWidth(420)
         self.note = QLabel(
             "The spread is the half-width of the band that holds the predictions of every "
