@@ -25,8 +25,18 @@ def add_parser(sub, name, help_text):
     return p
 
 
+#: Plausible spread of each holder parameter around the nominal values (MODEL.md §8.1):
+#: (name, step); k_tt and k_rr in decades. The labels use how far each bending mode
+#: moves per spread.
+PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
+                    ("density_factor", 0.03), ("alpha", 15.0))
+
+
 def model_guidance(assembly):
-    """Model bending frequencies with nominal parameters (3,) and physical bounds (3, 2) [Hz]."""
+    """Model bending frequencies with nominal parameters (3,), their physical bounds
+    (3, 2) and their shift per plausible parameter spread (3, 5) [Hz]."""
+    from dataclasses import replace
+
     import numpy as np
 
     from taptune.model import ModelOptions, analyse, bending_bounds
@@ -35,7 +45,13 @@ def model_guidance(assembly):
     options = ModelOptions()
     expected = np.asarray(analyse(assembly, NOMINAL, options).bending_hz[:3], dtype=float)
     bounds = np.asarray(bending_bounds(assembly, options), dtype=float)
-    return expected, bounds
+    spread = np.zeros((expected.size, len(PARAMETER_SPREAD)))
+    for k, (name, step) in enumerate(PARAMETER_SPREAD):
+        value = getattr(NOMINAL, name)
+        moved = value * 10**step if name in ("k_tt", "k_rr") else value + step
+        f = np.asarray(analyse(assembly, replace(NOMINAL, **{name: moved}), options).bending_hz[:3])
+        spread[:, k] = f[:expected.size] - expected
+    return expected, bounds, spread
 
 
 def print_summary(analysis, stream=None) -> None:
@@ -75,16 +91,17 @@ def run(args) -> int:
 
         load_band_table(args.bands)  # fail early, naming the file
         options = replace(options, band_table=args.bands)
-    expected = bounds = None
+    expected = bounds = spread = None
     interface = args.interface or "HSK-A63"
     if args.assembly:
         from taptune.io.assembly import load_assembly
 
         assembly = load_assembly(args.assembly)
         interface = args.interface or assembly.holder.interface
-        expected, bounds = model_guidance(assembly)
+        expected, bounds, spread = model_guidance(assembly)
     analysis = analyse_recording(recording, interface=interface, expected_hz=expected,
-                                 bounds_hz=bounds, options=options, interface_tap=interface_tap)
+                                 bounds_hz=bounds, options=options, interface_tap=interface_tap,
+                                 spread_hz=spread)
     data = analysis.to_dict()
     if expected is not None:
         data["model_bending_hz"] = [round(float(f), 2) for f in expected]

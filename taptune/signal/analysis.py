@@ -258,7 +258,7 @@ def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions) -> list[str]:
 
 def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", expected_hz=None,
                       bounds_hz=None, options: SpectrumOptions = SpectrumOptions(),
-                      interface_tap: Recording | None = None) -> SpectrumAnalysis:
+                      interface_tap: Recording | None = None, spread_hz=None) -> SpectrumAnalysis:
     """Find the taps, average their spectra, pick, refine and label the peaks.
 
     Parameters
@@ -274,6 +274,9 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     options : SpectrumOptions
     interface_tap : Recording, optional
         Taps on the interface itself: the peaks that grow there are its local modes.
+    spread_hz : array_like, shape (n, k), optional
+        How far each model bending frequency moves [Hz] per plausible spread of each
+        holder parameter (:func:`~taptune.signal.labels.assign_bending`); sharper labels.
 
     Returns
     -------
@@ -304,6 +307,7 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
                         f"{float(np.max(expected_hz)):.0f} Hz is above 0.9 x Nyquist; record at "
                         f"a higher rate (96 kHz)")
     labeled, lw = label_peaks(peaks, bands=bands, expected_hz=expected_hz, bounds_hz=bounds_hz,
+                              spread_hz=spread_hz,
                               stationary=r["stationary"], growth_db=growth,
                               grow_threshold_db=o.grow_threshold_db, options=o.labels)
     warnings.extend(lw)

@@ -128,7 +128,9 @@ class LabelOptions:
     """Weights of the joint bending assignment (see module docstring).
 
     sigma_mode : float
-        Spread of a mode's log-frequency around the two-term explanation.
+        Spread of a mode's log-frequency around the two-term explanation (bounds only).
+    sigma_mode_spread : float
+        The same around the explanation by the model's parameter spreads (sharper).
     sigma_common : float
         Prior spread of the shift common to all modes (material factors, model error).
     sigma_contact : float
@@ -153,6 +155,7 @@ class LabelOptions:
     # Defaults chosen on synthetic recordings of random holders (the model's tip
     # receptance plus workshop nuisances), not on the development cases.
     sigma_mode: float = 0.03
+    sigma_mode_spread: float = 0.02
     sigma_common: float = 0.04
     sigma_contact: float = 1.0
     missing_cost: tuple = (9.0, 3.0, 3.0)
@@ -162,14 +165,14 @@ class LabelOptions:
     max_candidates: int = 8
 
 
-def _explain_cost(r, w, o: LabelOptions) -> float:
-    """Min over (c, q) of Σ((r − c − q·w)/σ)² + (c/σ_c)² + (q/σ_q)²; r, w shape (n,)."""
-    a = np.column_stack([np.ones_like(w), w]) / o.sigma_mode
-    b = r / o.sigma_mode
-    prior = np.diag([1 / o.sigma_common**2, 1 / o.sigma_contact**2])
-    coef = np.linalg.solve(a.T @ a + prior, a.T @ b)
+def _explain_cost(r, basis, sigma_mode: float) -> float:
+    """Min over a of Σ((r − basis·a)/σ)² + |a|²: how well unit-variance parameter shifts
+    explain the log-frequency shifts ``r`` (n,); ``basis`` (n, k) is ln f per unit shift."""
+    a = basis / sigma_mode
+    b = r / sigma_mode
+    coef = np.linalg.solve(a.T @ a + np.eye(a.shape[1]), a.T @ b)
     res = b - a @ coef
-    return float(res @ res + coef @ prior @ coef)
+    return float(res @ res + coef @ coef)
 
 
 def _missing(o: LabelOptions, mode_index: int) -> float:
@@ -178,7 +181,8 @@ def _missing(o: LabelOptions, mode_index: int) -> float:
 
 
 def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
-                   candidates=None, options: LabelOptions = LabelOptions()) -> list[int | None]:
+                   candidates=None, spread_hz=None,
+                   options: LabelOptions = LabelOptions()) -> list[int | None]:
     """Choose the peak of each bending mode with model guidance.
 
     Parameters
@@ -195,6 +199,11 @@ def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
         Interface bands [Hz].
     candidates : sequence of bool, optional
         Which peaks may be bending at all (default all).
+    spread_hz : array_like, shape (n, k), optional
+        How far each bending frequency moves [Hz] when holder parameter k moves by one
+        plausible spread (e.g. contact stiffness ×3, modulus +5 %), from the model.
+        Without it the shifts are explained by a common (material) shift and a contact
+        shift in proportion to each mode's distance to its rigid-contact bound.
 
     Returns
     -------
@@ -214,6 +223,12 @@ def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
     # Each mode's sensitivity to the contact: log-distance from nominal to rigid contact
     # (the tool's modes move a lot with the contact, a holder mode hardly).
     w = np.maximum(np.log(np.maximum(rigid, e) / e), 0.005)
+    if spread_hz is not None:
+        basis = np.log1p(np.asarray(spread_hz, dtype=np.float64).reshape(n, -1) / e[:, None])
+        sigma = options.sigma_mode_spread
+    else:
+        basis = np.column_stack([np.full(n, options.sigma_common), options.sigma_contact * w])
+        sigma = options.sigma_mode
     ok = [True] * len(peaks) if candidates is None else list(candidates)
     hz = np.array([p.hz for p in peaks])
     per_mode = []
@@ -236,7 +251,7 @@ def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
         if chosen:
             ms = np.array([m for m, _ in chosen])
             r = np.log(np.array(fs) / e[ms])
-            cost += _explain_cost(r, w[ms], options) + float(sum(unit[i] for _, i in chosen))
+            cost += _explain_cost(r, basis[ms], sigma) + float(sum(unit[i] for _, i in chosen))
         if cost < best_cost:
             best, best_cost = list(combo), cost
     return best
@@ -267,7 +282,7 @@ def interface_growth(peaks: list[Peak], iface_peaks: list[Peak], tol_rel: float 
     return [None if g is None else g - med for g in raw]
 
 
-def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None,
+def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None, spread_hz=None,
                 stationary=None, growth_db=None, grow_threshold_db: float = 10.0,
                 n_modes: int = 3, options: LabelOptions = LabelOptions()) -> tuple[list[Peak], list[str]]:
     """Label peaks ``bending`` / ``local`` / ``other``.
@@ -278,8 +293,8 @@ def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None
         Ascending in frequency.
     bands : sequence of (lo, hi)
         Interface local-mode bands [Hz].
-    expected_hz, bounds_hz : array_like, optional
-        Model guidance, shapes (n,) and (n, 2) [Hz].
+    expected_hz, bounds_hz, spread_hz : array_like, optional
+        Model guidance, shapes (n,), (n, 2), (n, k) [Hz] (see :func:`assign_bending`).
     stationary : sequence of bool, optional
         Peaks also present between taps (hum, room noise): never bending or local.
     growth_db : sequence of (float or None), optional
@@ -303,7 +318,8 @@ def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None
     use_bands = bands if growth_db is None else ()
     cand = [not stat[i] and not grown[i] for i in range(p)]
     if expected_hz is not None and len(expected_hz):
-        modes = assign_bending(peaks, expected_hz, bounds_hz, use_bands, candidates=cand, options=options)
+        modes = assign_bending(peaks, expected_hz, bounds_hz, use_bands, candidates=cand,
+                               spread_hz=spread_hz, options=options)
         n_sought = len(modes)
     else:
         pool = [i for i in range(p) if cand[i] and not in_bands(peaks[i].hz, use_bands)

@@ -105,3 +105,20 @@ def test_missing_modes_are_reported():
     out, warnings = label_peaks(_peaks((3480.0, 0, 40)), expected_hz=expected)
     assert out[0].mode == 1
     assert any("only 1 of 3" in w and "2, 3" in w for w in warnings)
+
+
+def test_model_spreads_explain_a_holder_mode_that_moves_against_the_tool_modes():
+    # ER32 × D6 assembly (the development assembly d02): model frequencies with nominal
+    # parameters, bounds, and how far each mode moves per spread of k_tt (×3), k_rr
+    # (×10), modulus (+5 %), density (+3 %), alpha (+15 %), all from taptune.model. A
+    # stiffer holder material lifts mode 2 (a holder mode) by 3.5 % while a softer
+    # contact lowers modes 1 and 3: only the spreads tell that this is consistent.
+    expected = [2848.7, 11458.5, 13701.9]
+    bounds = [[494.6, 3043.0], [1852.4, 12293.4], [7436.2, 14493.2]]
+    spread = [[7.0, 124.6, 0.4, -1.4, 11.0], [3.1, 16.2, 262.0, -153.4, 1.6],
+              [53.3, 437.8, 26.4, -17.8, 40.9]]
+    peaks = _peaks((2626.0, 0, 50), (9519.0, -5, 45), (10382.0, -10, 40), (11865.0, -25, 30),
+                   (13077.0, -22, 35), (15846.0, -20, 40))
+    out, warnings = label_peaks(peaks, bands=BAND, expected_hz=expected, bounds_hz=bounds, spread_hz=spread)
+    assert [p.mode for p in out] == [1, None, None, 2, 3, None] and warnings == []
+    assert [p.kind for p in out][1:3] == ["local", "local"]
