@@ -71,6 +71,8 @@ def plot_spectrum(analysis, path, expected_hz=None, title: str | None = None, dp
         seen.add(p.kind)
         ax.plot([p.hz / 1e3], [y], marker="v" if p.kind == "bending" else "o", color=colour,
                 ms=8 if p.kind == "bending" else 5, zorder=4, ls="none", label=label)
+        if p.note.startswith("stationary"):
+            continue  # hum and its harmonics: marked, not labelled (they crowd 0-1 kHz)
         if p.kind == "bending":
             text, size, weight = f"f{p.mode} = {p.hz:,.1f} Hz", 9, "bold"
         else:
@@ -78,7 +80,9 @@ def plot_spectrum(analysis, path, expected_hz=None, title: str | None = None, dp
         ax.annotate(text, (p.hz / 1e3, y), xytext=(0, 8), textcoords="offset points", ha="center",
                     va="bottom", rotation=90 if p.kind != "bending" else 0, fontsize=size,
                     color=colour, fontweight=weight, zorder=5)
-    ax.set_xlim(0, f_khz[-1] if f_khz.size else 1)
+    # Up to 24 kHz (the band of interest) or a little beyond the highest peak.
+    top_hz = max([24000.0] + [1.15 * p.hz for p in a.peaks])
+    ax.set_xlim(0, min(top_hz / 1e3, f_khz[-1]) if f_khz.size else 1)
     ax.set_ylim(max(floor - 5, -120), 12)
     ax.set_xlabel("frequency [kHz]")
     ax.set_ylabel("magnitude [dB re maximum]")

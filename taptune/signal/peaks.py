@@ -84,7 +84,8 @@ def parabolic_peak(y, i):
 
 def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: float = 15.0,
                min_local_db: float = 12.0, ring_hz: float = 500.0, fmin_hz: float = 100.0,
-               fmax_hz: float | None = None, max_peaks: int = 40):
+               fmax_hz: float | None = None, max_peaks: int = 40,
+               shoulder_prominence_db: float = 10.0, shoulder_snr_db: float = 30.0):
     """Local maxima of the dB spectrum that stand out from their surroundings and the floor.
 
     Prominence alone is a poor test on a noisy spectrum: the nulls of a noise-like
@@ -109,6 +110,9 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
         Band searched [Hz].
     max_peaks : int
         Keep at most this many, those standing highest above their ring.
+    shoulder_prominence_db, shoulder_snr_db : float
+        A peak failing the ring test is kept with this prominence and this height
+        above ``floor`` (a mode on the skirt of a louder one).
 
     Returns
     -------
@@ -146,7 +150,9 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
         right = db[i + w_in:i + w_in + ring]
         around = np.concatenate([left, right])
         local[k] = db[i] - (np.median(around) if around.size else -np.inf)
-    keep = local >= min_local_db
+    # Beside a much louder peak the ring median sits on its skirt: there a clear
+    # prominence far above the noise is enough.
+    keep = (local >= min_local_db) | ((prom >= shoulder_prominence_db) & (over >= shoulder_snr_db))
     idx, prom, local, hw, over = idx[keep], prom[keep], local[keep], hw[keep], over[keep]
     if idx.size > max_peaks:
         top = np.sort(np.argsort(local)[::-1][:max_peaks])
