@@ -10,6 +10,7 @@ The reference is the full model: ARPACK modes and the direct (one LU per frequen
 tip receptance.
 """
 
+import copy
 import itertools
 import tomllib
 from pathlib import Path
@@ -20,7 +21,7 @@ import pytest
 from taptune.io.assembly import load_assembly, parse_assembly
 from taptune.model import build_model, solve_modes, tip_receptance
 from taptune.model.params import NOMINAL, P_LOWER, P_UPPER, HolderParams, from_p, to_p
-from taptune.model.reduced import BatchEvaluation, Evaluation, FastEvaluator
+from taptune.model.reduced import BatchEvaluation, Evaluation, FastEvaluator, ReductionOptions, _Solver
 from tests.conftest import REFERENCE_TOML
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
@@ -133,6 +134,21 @@ def test_evaluate_many_equals_evaluate(reference):
         np.testing.assert_allclose(batch[i].bending_hz, single.bending_hz, rtol=1e-9)
         np.testing.assert_allclose(batch[i].damping_ratio, single.damping_ratio, rtol=1e-6)
         np.testing.assert_allclose(batch[i].tip_receptance, single.tip_receptance, rtol=1e-6)
+
+
+def test_dense_fallback_gives_the_same_answer(reference):
+    """A candidate whose inverse iteration does not converge is solved densely on the reduced
+    model (iterations = 0); forced here by a solver with an unreachable tolerance."""
+    _, ev = reference
+    dense = copy.copy(ev)
+    dense._solver = _Solver(ev.model, ReductionOptions(tol=0.0, tol_damping=0.0, max_iterations=2))
+    window = 4800.0 + WINDOW
+    for p in sample(2, 1, 4):
+        e, d = ev.evaluate(p, window), dense.evaluate(p, window)
+        assert d.iterations == 0
+        np.testing.assert_allclose(d.bending_hz, e.bending_hz, rtol=1e-5)
+        assert d.damping_ratio[0] == pytest.approx(e.damping_ratio[0], rel=1e-3)
+        assert np.max(np.abs(d.tip_receptance - e.tip_receptance)) < 1e-3 * np.max(np.abs(e.tip_receptance))
 
 
 def test_low_frequency_receptance_is_the_rigid_body_mass_line(reference):
