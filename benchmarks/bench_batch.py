@@ -9,14 +9,15 @@ writes and summary.csv.
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_batch.py [--count 50] [--jobs 1 2]
         [--population 64 --generations 90]
 
-On a shared machine the numbers move with the other load: repeat, and compare runs made
-at the same time.
+On a shared machine the wall-clock numbers move with the other load (the load average
+before each run is printed); the CPU seconds per recording do not, much.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -47,14 +48,18 @@ def write_recordings(folder: Path, count: int) -> None:
         write_tap_recording(folder / f"r{i:03d}.wav", asm, NOMINAL, seed=i, sample_rate=96000)
 
 
-def run_batch(folder: Path, work: Path, jobs: int, budget: list[str]) -> tuple[float, int, str]:
-    """(seconds, exit status, last lines of output) of one batch run."""
+def run_batch(folder: Path, work: Path, jobs: int, budget: list[str]) -> tuple[float, float, int, str]:
+    """(wall seconds, CPU seconds of the batch and its workers, exit status, last lines of output) of one run."""
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
     cmd = [sys.executable, "-m", "taptune", "batch", str(folder), "--out", str(work / f"out{jobs}"),
            "--library", str(work / f"lib{jobs}.json"), "--jobs", str(jobs), *budget]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
-    return time.perf_counter() - t0, proc.returncode, "\n".join(proc.stdout.splitlines()[-3:])
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, proc.returncode, "\n".join(proc.stdout.splitlines()[-5:])
 
 
 def main(argv=None) -> int:
@@ -78,10 +83,13 @@ def main(argv=None) -> int:
         write_recordings(folder, args.count)
         print(f"{args.count} recordings written in {time.perf_counter() - t0:.1f} s; "
               f"budget: {' '.join(budget) or 'library defaults'}; {os.cpu_count()} CPUs\n")
-        print(f"{'jobs':>4}  {'wall [s]':>9}  {'recordings/min':>15}  {'exit':>4}")
+        print(f"{'jobs':>4}  {'wall [s]':>9}  {'recordings/min':>15}  {'CPU [s]':>8}  {'CPU s/recording':>15}  "
+              f"{'load before':>11}  {'exit':>4}")
         for jobs in args.jobs:
-            seconds, code, tail = run_batch(folder, work, jobs, budget)
-            print(f"{jobs:>4}  {seconds:9.1f}  {60 * args.count / seconds:15.1f}  {code:>4}")
+            load = os.getloadavg()[0]
+            seconds, cpu, code, tail = run_batch(folder, work, jobs, budget)
+            print(f"{jobs:>4}  {seconds:9.1f}  {60 * args.count / seconds:15.1f}  {cpu:8.1f}  "
+                  f"{cpu / args.count:15.2f}  {load:11.1f}  {code:>4}", flush=True)
             if code != 0:
                 print(tail)
     return 0
