@@ -2,8 +2,8 @@
 
 Writes N synthetic recordings (taptune.synthetic; reference assembly, nominal holder,
 stick-outs 45–60 mm, 8 holder names) into a temporary folder and runs
-``python -m taptune batch`` on them once per --jobs value, each with a fresh output
-folder and library. The wall time includes process start, analysis, the fits, library
+``python -m taptune batch`` on them once per --jobs value (repeat a value to run it
+again), each with a fresh output folder and library. The wall time includes process start, analysis, the fits, library
 writes and summary.csv.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_batch.py [--count 50] [--jobs 1 2]
@@ -48,11 +48,11 @@ def write_recordings(folder: Path, count: int) -> None:
         write_tap_recording(folder / f"r{i:03d}.wav", asm, NOMINAL, seed=i, sample_rate=96000)
 
 
-def run_batch(folder: Path, work: Path, jobs: int, budget: list[str]) -> tuple[float, float, int, str]:
+def run_batch(folder: Path, out: Path, jobs: int, budget: list[str]) -> tuple[float, float, int, str]:
     """(wall seconds, CPU seconds of the batch and its workers, exit status, last lines of output) of one run."""
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
-    cmd = [sys.executable, "-m", "taptune", "batch", str(folder), "--out", str(work / f"out{jobs}"),
-           "--library", str(work / f"lib{jobs}.json"), "--jobs", str(jobs), *budget]
+    cmd = [sys.executable, "-m", "taptune", "batch", str(folder), "--out", str(out),
+           "--library", str(out / "lib.json"), "--jobs", str(jobs), *budget]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -85,9 +85,9 @@ def main(argv=None) -> int:
               f"budget: {' '.join(budget) or 'library defaults'}; {os.cpu_count()} CPUs\n")
         print(f"{'jobs':>4}  {'wall [s]':>9}  {'recordings/min':>15}  {'CPU [s]':>8}  {'CPU s/recording':>15}  "
               f"{'load before':>11}  {'exit':>4}")
-        for jobs in args.jobs:
+        for run, jobs in enumerate(args.jobs):
             load = os.getloadavg()[0]
-            seconds, cpu, code, tail = run_batch(folder, work, jobs, budget)
+            seconds, cpu, code, tail = run_batch(folder, work / f"run{run}", jobs, budget)  # fresh: nothing skipped
             print(f"{jobs:>4}  {seconds:9.1f}  {60 * args.count / seconds:15.1f}  {cpu:8.1f}  "
                   f"{cpu / args.count:15.2f}  {load:11.1f}  {code:>4}", flush=True)
             if code != 0:
