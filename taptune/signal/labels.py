@@ -35,8 +35,10 @@ import numpy as np
 from taptune.errors import InputError
 from taptune.signal.peaks import Peak
 
+#: Local-mode bands of one interface: ((lo_hz, hi_hz), ...).
+Bands = tuple[tuple[float, float], ...]
 #: Built-in local-mode bands [Hz] per spindle interface.
-BUILTIN_BANDS: dict[str, tuple[tuple[float, float], ...]] = {
+BUILTIN_BANDS: dict[str, Bands] = {
     "HSK-A63": ((9350.0, 10550.0),),
 }
 #: Frequency factor of the material corner in the upper bounds of MODEL.md §7.6
@@ -50,7 +52,7 @@ def _norm(name: str) -> str:
     return "".join(ch for ch in str(name).upper() if ch.isalnum())
 
 
-def load_band_table(path) -> dict[str, tuple[tuple[float, float], ...]]:
+def load_band_table(path) -> dict[str, Bands]:
     """Read a user table of interface local-mode bands.
 
     The file (TOML or JSON) maps interface names to lists of ``[lo_hz, hi_hz]`` pairs,
@@ -91,7 +93,7 @@ def load_band_table(path) -> dict[str, tuple[tuple[float, float], ...]]:
     return table
 
 
-def interface_bands(interface: str | None, table_path=None) -> tuple[tuple[tuple[float, float], ...], str | None]:
+def interface_bands(interface: str | None, table_path=None) -> tuple[Bands, str | None]:
     """Local-mode bands [Hz] of a spindle interface, and a warning when none are known.
 
     Looks in ``table_path``, then the file named by ``$TAPTUNE_INTERFACE_BANDS``, then
@@ -324,7 +326,8 @@ def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None
     else:
         pool = [i for i in range(p) if cand[i] and not in_bands(peaks[i].hz, use_bands)
                 and peaks[i].hz >= options.min_guess_hz]
-        pool = sorted(sorted(pool, key=lambda i: -peaks[i].prominence_db)[:n_modes], key=lambda i: peaks[i].hz)
+        loudest = sorted(pool, key=lambda i: -peaks[i].prominence_db)[:n_modes]
+        pool = sorted(loudest, key=lambda i: peaks[i].hz)
         modes = pool + [None] * (n_modes - len(pool))
         n_sought = n_modes
         if pool:

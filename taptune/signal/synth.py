@@ -220,7 +220,8 @@ def synthesize_recording(freq_hz, receptance, nuisances: Nuisances = Nuisances()
     if f_in.shape == grid.shape and np.allclose(f_in, grid):
         h = h_in.copy()
     else:
-        h = np.interp(grid, f_in, h_in.real, left=0, right=0) + 1j * np.interp(grid, f_in, h_in.imag, left=0, right=0)
+        h = (np.interp(grid, f_in, h_in.real, left=0, right=0)
+             + 1j * np.interp(grid, f_in, h_in.imag, left=0, right=0))
     if rigid_body == "remove":
         h = without_rigid_body(grid, h)
     tilt = (1j * grid / f_ref_hz) ** n_.radiation_exponent
@@ -269,7 +270,8 @@ def synthesize_recording(freq_hz, receptance, nuisances: Nuisances = Nuisances()
         # Fractional delay by a linear phase on the whole signal.
         spec = np.fft.rfft(x)
         f = np.fft.rfftfreq(n_total, 1 / fs)
-        chans.append(n_.gain2 * np.fft.irfft(spec * np.exp(-2j * np.pi * f * n_.delay2_samples / fs), n=n_total))
+        shift = np.exp(-2j * np.pi * f * n_.delay2_samples / fs)
+        chans.append(n_.gain2 * np.fft.irfft(spec * shift, n=n_total))
     out = []
     for c in chans:
         if n_.snr_db is not None:
