@@ -35,6 +35,7 @@ import traceback
 from collections import deque
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Callable, Sequence
 
 from taptune.errors import InputError
@@ -505,7 +506,7 @@ def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCall
     """
     from taptune.cli.common import write_json
     from taptune.identify import identify
-    from taptune.report.pdf import recording_view, report_pages
+    from taptune.report.pdf import recording_view
 
     t0 = time.perf_counter()
     out_dir = Path(options.out_dir)
@@ -524,22 +525,35 @@ def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCall
 
             save_identification(options.library, result, recordings, assemblies)
         seconds = time.perf_counter() - t0
+        done = []  # rows join the outcome only when every file of the job is written
         for k, item in enumerate(group):
             view = recording_view(result, k)
             data = _result_json(view, item, recordings[k], analyses[k], group, result.objective)
             write_json(data, str(item.json_path))
-            rows.append(Row(str(item.path), item.holder, "ok", _three(view.bending_measured_hz[0]),
+            done.append(Row(str(item.path), item.holder, "ok", _three(view.bending_measured_hz[0]),
                             _three(view.bending_model_hz[0]), view.objective, seconds, _warning_note(data)))
-        pages = ()
-        if options.keep_pages:
-            slim = [_slim(a) for a in analyses]
-            pages = tuple(report_pages(result, slim, recordings, assemblies, id_options.model))
     except InputError as err:
         return Outcome(tuple(rows + _rows_for(group, "failed", one_line(err), time.perf_counter() - t0)))
     except Exception as err:  # noqa: BLE001 - reported as status "error", traceback to errors.log
         _log_error(out_dir, group, err)
         return Outcome(tuple(rows + _rows_for(group, "error", one_line(err), time.perf_counter() - t0)))
-    return Outcome(tuple(rows), pages)
+    pages = _pages(result, analyses, recordings, assemblies, id_options.model, out_dir) if options.keep_pages else ()
+    return Outcome(tuple(rows + done), pages)
+
+
+def _pages(result, analyses, recordings, assemblies, model_options, out_dir: Path) -> tuple:
+    """Report pages of a finished identification; none (and a log entry) if they cannot be made.
+
+    The identification itself is stored and written by then: a report problem must not
+    turn it into a failure.
+    """
+    from taptune.report.pdf import report_pages
+
+    try:
+        return tuple(report_pages(result, [_slim(a) for a in analyses], recordings, assemblies, model_options))
+    except Exception as err:  # noqa: BLE001 - logged; the summary page still lists the recording
+        _log_error(out_dir, [SimpleNamespace(path=r.path) for r in recordings], err)
+        return ()
 
 
 def _warning_note(data: dict) -> str:

@@ -267,3 +267,17 @@ def test_summary_csv_round_trips(tmp_path):
     assert [r["status"] for r in rows] == ["ok"]
     assert float(rows[0]["f1_model_hz"]) == pytest.approx(result.rows[0].model_hz[0], abs=0.01)
     assert not (tmp_path / "lib.json").exists()  # save=False leaves the library alone
+
+
+def test_a_report_page_that_cannot_be_made_leaves_the_identification_ok(tmp_path, monkeypatch):
+    import taptune.report.pdf as pdf
+
+    write_case(tmp_path, "a", "ER32 a")
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("no page today")
+
+    monkeypatch.setattr(pdf, "report_pages", broken)
+    result = run_batch([tmp_path], tiny(tmp_path, keep_pages=True))
+    assert [r.status for r in result.rows] == ["ok"] and result.pages == ()
+    assert "no page today" in (tmp_path / "out" / "errors.log").read_text()
