@@ -55,6 +55,17 @@ def test_open_identify_save_and_predict(qtbot, window, generated_recording, libr
     assert window.fit.freq_table.item(0, 1).text() == f"{bending[0]:,.1f}"
     assert abs(result.bending_model_hz[0][0] / bending[0] - 1) < 0.02
 
+    # A library that cannot be written: a message, and the identification is kept.
+    blocker_file = library_path.parent / "not-a-folder"
+    blocker_file.parent.mkdir(parents=True, exist_ok=True)
+    blocker_file.write_text("")
+    window.library_view.library_path = blocker_file / "holders.json"
+    assert window.save_to_library() is None
+    assert messages.history[-1][0] == "Cannot save to the library"
+    assert window.identification is result and window.save_button.isEnabled()
+    messages.history.clear()
+    window.library_view.library_path = library_path
+
     # Save to the temporary library: the library view lists it.
     assert window.save_button.isEnabled()
     assert window.save_to_library() == "ER32 collet chuck HSK-A63 x 100"

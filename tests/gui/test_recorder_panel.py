@@ -92,3 +92,20 @@ def test_without_an_input_device_recording_is_disabled_with_a_reason(window):
     assert not panel.arm_button.isEnabled()
     assert "no audio input device found" in panel.state.text()
     assert window.open_button.isEnabled()
+
+
+def test_without_portaudio_the_panel_says_so(qtbot, library_path):
+    from taptune.errors import DeviceError
+    from taptune.gui.main_window import MainWindow
+
+    def no_library():
+        raise DeviceError("no audio library: the PortAudio library was not found (on Debian/Ubuntu: "
+                          "sudo apt install libportaudio2)")
+
+    win = MainWindow(library_path, devices=no_library)
+    qtbot.addWidget(win)
+    assert not win.recorder.arm_button.isEnabled()
+    assert "PortAudio library was not found" in win.recorder.state.text()
+    win.recorder.arm()  # nothing happens, nothing breaks
+    assert not win.recorder.recording
+    win.close()
