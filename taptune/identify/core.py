@@ -15,8 +15,6 @@ uncertainty that ``predict`` reports.
 
 from __future__ import annotations
 
-import multiprocessing as mp
-import os
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
@@ -25,7 +23,8 @@ import numpy as np
 
 from taptune.errors import InputError
 from taptune.identify.objective import Objective, ObjectiveOptions, Target, make_target, model_shape
-from taptune.identify.optimize import Archive, Cancelled, GAOptions, genetic_algorithm, polish
+from taptune.identify import search
+from taptune.identify.optimize import Cancelled, GAOptions
 from taptune.model.params import NAMES, HolderParams, from_p, p_to_unit, to_p, unit_to_p
 
 ProgressCallback = Callable[[float, str], "bool | None"]
@@ -39,15 +38,27 @@ class IdentifyOptions:
     islands: int = 2  # independent GA runs, each polished; their union is the archive
     jobs: int | None = None  # processes; None = min(islands, CPU count)
     ga: GAOptions = GAOptions()
-    polish_evaluations: int = 300
-    polish_starts: int = 6  # polishes from diverse good points (island bests first)
+    polish_evaluations: int = 250
+    polish_starts: int = 4  # polishes from diverse good points (island bests first)
     polish_band: float = 2.0  # archive points this far above J_min may start a polish
     objective: ObjectiveOptions = ObjectiveOptions()
     model: object | None = None  # taptune.model.ModelOptions; None = defaults
-    # Near-optimal set: candidates with J <= J_min + near_abs + near_rel * J_min.
-    near_abs: float = 0.05
-    near_rel: float = 0.10
-    near_count: int = 12  # how many diverse members the set keeps (best included)
+    # Near-optimal set (the uncertainty, MODEL.md §8.6), term by term against the best fit:
+    # the frequency term may exceed the best's by near_frequency per measured mode (≈ the
+    # 0.05 % the peaks are measured to); the shape term, dominated by the systematic
+    # difference between the sound and the tip receptance (radiation, microphone), may
+    # reach near_shape_factor × the best's + near_shape_abs.
+    near_frequency: float = 0.01
+    near_shape_factor: float = 3.0
+    near_shape_abs: float = 0.02
+    near_candidates: int = 300  # archive points re-evaluated term by term
+    # The set's extent: each parameter pushed low and high inside it (a long valley runs
+    # far beyond what the optimisers' archives visit).
+    extremes: bool = True
+    extreme_evaluations: int = 600
+    walks: int = 0  # optional random walks through the set (uncertainty.valley_walk)
+    walk_steps: int = 400
+    near_count: int = 24  # how many diverse members the set keeps (best included)
 
 
 @dataclass(frozen=True)
@@ -136,182 +147,6 @@ def bending_peaks(analysis) -> dict[int, float]:
     return out
 
 
-def _select_diverse(u: np.ndarray, f: np.ndarray, count: int) -> np.ndarray:
-    """Indices of up to ``count`` mutually distant rows of u, starting with the best (farthest-point sampling)."""
-    order = np.argsort(f, kind="stable")
-    u = u[order]
-    chosen = [0]
-    dist = np.linalg.norm(u - u[0], axis=1)
-    while len(chosen) < min(count, len(u)):
-        i = int(np.argmax(dist))
-        if dist[i] < 1e-6:
-            break
-        chosen.append(i)
-        dist = np.minimum(dist, np.linalg.norm(u - u[i], axis=1))
-    return order[np.array(chosen)]
-
-
-# The objective and the progress counters a worker sees. Set in the parent before the
-# worker processes fork, so the evaluators are built once and shared, never pickled.
-_STATE: dict = {}
-
-
-@dataclass(frozen=True)
-class _RunResult:
-    u: np.ndarray
-    value: float
-    evaluations: int
-    archive_u: np.ndarray
-    archive_f: np.ndarray
-    cancelled: bool = False
-
-
-def _near_band(value: float, options: IdentifyOptions) -> float:
-    return options.near_abs + options.near_rel * abs(value)
-
-
-def _ga_task(index: int) -> _RunResult:
-    """One GA island; returns its best point and the archive near it."""
-    objective: Objective = _STATE["objective"]
-    options: IdentifyOptions = _STATE["options"]
-    counts, cancel = _STATE["counts"], _STATE["cancel"]
-    seed = np.random.SeedSequence(options.seed).spawn(options.islands)[index]
-    archive = Archive()
-    start = objective.evaluations
-
-    def on_generation(generation, best):
-        counts[index] = generation
-        return not cancel.is_set()
-
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1):
-        try:
-            ga = genetic_algorithm(
-                lambda U: objective.batch(unit_to_p(U)), len(NAMES), np.random.default_rng(seed), options.ga,
-                archive, on_generation,
-            )
-        except Cancelled:
-            au, af = archive.arrays()
-            return _RunResult(au[0], float(af[0]), objective.evaluations - start, au[:0], af[:0], True)
-    counts[index] = options.ga.generations
-    au, af = archive.arrays()
-    # The polish starts and the near-optimal set come from the neighbourhood of the optimum only.
-    keep = af <= ga.value + options.polish_band + _near_band(ga.value, options)
-    return _RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep])
-
-
-def _polish_task(u0: np.ndarray) -> _RunResult:
-    """BOBYQA from one start; returns the polished point and its near-optimal trail."""
-    objective: Objective = _STATE["objective"]
-    options: IdentifyOptions = _STATE["options"]
-    if _STATE["cancel"].is_set():
-        return _RunResult(u0, Objective.BAD, 0, np.empty((0, len(u0))), np.empty(0), True)
-    archive = Archive()
-    start = objective.evaluations
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1):
-        u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
-    au, af = archive.arrays()
-    keep = af <= value + _near_band(value, options)
-    return _RunResult(u, value, objective.evaluations - start, au[keep], af[keep])
-
-
-def _polish_starts(results: list[_RunResult], options: IdentifyOptions) -> np.ndarray:
-    """Each island's best, then diverse good points of the archives (different places on the
-    valley of equally good fits, MODEL.md §8.6), up to ``options.polish_starts``."""
-    au = np.vstack([r.archive_u for r in results] + [r.u[None, :] for r in results])
-    af = np.concatenate([r.archive_f for r in results] + [[r.value] for r in results])
-    j_min = float(af.min())
-    good = af <= j_min + options.polish_band + _near_band(j_min, options)
-    starts = [r.u for r in sorted(results, key=lambda r: r.value)]
-    for i in _select_diverse(au[good], af[good], options.polish_starts):
-        u = au[good][i]
-        if min(np.linalg.norm(u - s) for s in starts) > 0.05:
-            starts.append(u)
-    return np.array(starts[: max(options.polish_starts, len(results))])
-
-
-def _run_pool(objective: Objective, options: IdentifyOptions, progress: ProgressCallback | None):
-    """GA islands, then polishes from diverse starts; in forked processes where allowed."""
-    jobs = options.jobs or min(options.islands, os.cpu_count() or 1)
-    jobs = max(1, jobs)
-    use_processes = jobs > 1 and "fork" in mp.get_all_start_methods()
-    ctx = mp.get_context("fork") if use_processes else None
-    counts = ctx.Array("i", options.islands, lock=False) if ctx else [0] * options.islands
-    cancel = ctx.Event() if ctx else _LocalFlag()
-    total = options.islands * options.ga.generations
-    phase = {"base": 0.05, "span": 0.75}
-
-    def report() -> None:
-        fraction = phase["base"] + phase["span"] * min(1.0, sum(counts) / total)
-        message = "fitting the model" if phase["base"] < 0.5 else "polishing near-optimal fits"
-        if progress is not None and progress(fraction, message) is False:
-            cancel.set()
-
-    def run_tasks(pool, fn, items):
-        if pool is None:
-            out = []
-            for item in items:
-                out.append(fn(item))
-                if cancel.is_set():
-                    break
-            return out
-        pending = pool.map_async(fn, items, chunksize=1)
-        while not pending.ready():
-            pending.wait(0.1)
-            report()
-        return pending.get()
-
-    _STATE.update(objective=objective, options=options, counts=counts,
-                  cancel=_ProgressFlag(report, cancel) if ctx is None else cancel)
-    try:
-        pool = ctx.Pool(min(jobs, max(options.islands, options.polish_starts))) if ctx else None
-        try:
-            islands = run_tasks(pool, _ga_task, range(options.islands))
-            if cancel.is_set() or any(r.cancelled for r in islands):
-                raise Cancelled()
-            phase.update(base=0.8, span=0.0)
-            report()
-            polished = run_tasks(pool, _polish_task, list(_polish_starts(islands, options)))
-        finally:
-            if pool is not None:
-                pool.terminate()
-    finally:
-        _STATE.clear()
-    if cancel.is_set() or any(r.cancelled for r in polished):
-        raise Cancelled()
-    return islands, polished
-
-
-class _LocalFlag:
-    """A stand-in for multiprocessing.Event in the single-process path."""
-
-    def __init__(self):
-        self._set = False
-
-    def set(self):
-        self._set = True
-
-    def is_set(self):
-        return self._set
-
-
-class _ProgressFlag:
-    """Calls the progress report whenever the island asks whether it was cancelled."""
-
-    def __init__(self, report, flag):
-        self.report, self.flag = report, flag
-
-    def set(self):
-        self.flag.set()
-
-    def is_set(self):
-        self.report()
-        return self.flag.is_set()
-
-
 # ----------------------------------------------------------------------------- identify
 
 
@@ -373,21 +208,15 @@ def identify(
     objective = Objective(targets, evaluators, options.objective)
 
     say(0.05, "fitting the model")
-    islands, polished = _run_pool(objective, options, progress)
-    results = islands + polished
-    evaluations = sum(r.evaluations for r in results)
-    best = min(polished, key=lambda r: r.value)
-
-    # Near-optimal set over the union of the islands' archives.
-    au = np.vstack([r.archive_u for r in results])
-    af = np.concatenate([r.archive_f for r in results])
-    j_min = float(min(af.min(), best.value))
-    near = af <= j_min + options.near_abs + options.near_rel * j_min
-    chosen = _select_diverse(au[near], af[near], options.near_count)
-    sets_u = au[near][chosen]
-    # The polished optimum heads the set even where the archive holds an equal value.
-    sets_u = np.vstack([best.u, sets_u[np.linalg.norm(sets_u - best.u, axis=1) > 1e-9]])[: options.near_count]
-    param_sets = tuple(from_p(unit_to_p(u)) for u in sets_u)
+    modes = search.n_modes(objective)
+    with search.Workers(objective, options, progress) as workers:
+        islands = workers.map(search.ga_task, range(options.islands))
+        starts = search.polish_starts(islands, options, modes)
+        polished = workers.map(search.polish_task, starts, phase=(0.8, 0.0, "polishing the best fits"))
+        best = min(polished, key=lambda r: r.value)
+        members, extra = search.near_optimal_set(objective, workers, islands + polished, best, options)
+    evaluations = sum(r.evaluations for r in islands + polished) + extra
+    param_sets = tuple(from_p(unit_to_p(u)) for u in members)
     params = param_sets[0]
 
     say(0.97, "checking on the full model")
@@ -442,11 +271,11 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
             relative_floor: float = 5e-4) -> Prediction:
     """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
 
-    Every set fits the measurement equally well (MODEL.md §8.6), so the prediction is the
-    centre of the band their predictions span and the spread its half-width — but never
-    less than ``relative_floor`` × f: the measured frequencies themselves are only known
-    to about 0.05 % (or to the fit's residual misfit, if larger; see
-    :func:`fit_misfit`), and no parameter set can predict better than it was measured.
+    The first set is the best fit and gives the values. Every other set explains the
+    measurement as well (MODEL.md §8.6), so the spread is the largest deviation of any of
+    them from the best — a symmetric band that holds them all — but never less than
+    ``relative_floor`` × f: the measured frequencies themselves are only known to about
+    0.05 % (or to the fit's residual misfit, if larger; see :func:`fit_misfit`).
     """
     from taptune.model import ModelOptions, build_model, solve_modes
 
@@ -459,14 +288,12 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         f.append(np.asarray(modes.frequency_hz[:n_modes], dtype=float))
         z.append(np.asarray(modes.damping_ratio[:n_modes], dtype=float))
     f, z = np.array(f), np.array(z)
-    f_mid, z_mid = (f.max(0) + f.min(0)) / 2, (z.max(0) + z.min(0)) / 2
-    f_half = np.maximum((f.max(0) - f.min(0)) / 2, relative_floor * f_mid)
     return Prediction(
         stickout_mm=assembly.stickout * 1e3,
-        bending_hz=tuple(map(float, f_mid)),
-        bending_hz_spread=tuple(map(float, f_half)),
-        damping_ratio=tuple(map(float, z_mid)),
-        damping_ratio_spread=tuple(map(float, (z.max(0) - z.min(0)) / 2)),
+        bending_hz=tuple(map(float, f[0])),
+        bending_hz_spread=tuple(map(float, np.maximum(np.abs(f - f[0]).max(0), relative_floor * f[0]))),
+        damping_ratio=tuple(map(float, z[0])),
+        damping_ratio_spread=tuple(map(float, np.abs(z - z[0]).max(0))),
     )
 
 

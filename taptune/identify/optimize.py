@@ -22,8 +22,8 @@ class Cancelled(Exception):
 class GAOptions:
     """Settings of the genetic algorithm (MODEL.md §8.5 ranges)."""
 
-    population: int = 64
-    generations: int = 90
+    population: int = 48
+    generations: int = 70
     crossover_probability: float = 0.9
     crossover_eta: float = 10.0  # SBX distribution index: larger = children nearer parents
     mutation_eta: float = 20.0  # polynomial mutation distribution index

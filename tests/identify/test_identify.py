@@ -40,15 +40,17 @@ def test_fit_matches_the_measured_frequencies_to_0_1_percent(reference_fit):
 
 @pytest.mark.parametrize("stickout_mm", sorted(TRANSFER))
 def test_predictions_at_other_stickouts_match_the_published_model_values(reference_fit, stickout_mm):
-    """MODEL.md §8.6: parameters are not identifiable, predictions are (within 1 %; typically 0.3 %)."""
+    """MODEL.md §8.6: parameters are not identifiable, predictions are (within 1 %, the issue's bound;
+    the planning experiments saw up to 0.6 % on this very case)."""
     asm, _, result = reference_fit
     p = predict(result.param_sets, asm.with_stickout(stickout_mm * 1e-3))
     truth = np.array(TRANSFER[stickout_mm])
     error = np.abs(np.array(p.bending_hz) / truth - 1)
     assert error.max() < 0.01
-    assert np.median(error) < 0.004
     assert p.stickout_mm == pytest.approx(stickout_mm)
-    assert all(s >= 0 for s in p.bending_hz_spread)
+    spread = np.array(p.bending_hz_spread)
+    assert np.all(spread >= 5e-4 * truth * 0.99), "the band is never narrower than the measurement (0.05 %)"
+    assert np.all(spread < 0.02 * truth), "a band of ±2 % would say nothing"
 
 
 def test_same_seed_gives_identical_results_whatever_the_number_of_processes(reference_fit):

@@ -1,0 +1,289 @@
+"""The parallel search behind :func:`taptune.identify.identify`.
+
+Three phases run as tasks on a pool of forked worker processes (or in-process with
+``jobs=1``; the result is the same, bit for bit):
+
+1. genetic-algorithm islands, each seeded from the master seed;
+2. BOBYQA polishes from each island's best and from diverse good archive points;
+3. random walks through the near-optimal set (:mod:`taptune.identify.uncertainty`).
+
+The objective, with its evaluators, is set in :data:`STATE` before the workers fork, so it
+is built once and shared, never pickled.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from taptune.identify.objective import Objective
+from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish
+from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms, valley_walk
+from taptune.model.params import NAMES, unit_to_p
+
+STATE: dict = {}
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """One task's outcome: its best point and the archive points near it."""
+
+    u: np.ndarray
+    value: float
+    evaluations: int
+    archive_u: np.ndarray
+    archive_f: np.ndarray
+    cancelled: bool = False
+
+
+def n_modes(objective: Objective) -> int:
+    """Measured bending frequencies over all recordings."""
+    return sum(len(t.modes) for t in objective.targets)
+
+
+def near_band(value: float, options, modes: int) -> float:
+    """How far above J_min a member of the near-optimal set can lie (bounds both terms)."""
+    return modes * options.near_frequency + (options.near_shape_factor - 1) * abs(value) + options.near_shape_abs
+
+
+def select_diverse(u: np.ndarray, f: np.ndarray, count: int) -> np.ndarray:
+    """Indices of up to ``count`` mutually distant rows of u, the best first (farthest-point sampling)."""
+    if len(u) == 0:
+        return np.zeros(0, dtype=int)
+    order = np.argsort(f, kind="stable")
+    u = u[order]
+    chosen = [0]
+    dist = np.linalg.norm(u - u[0], axis=1)
+    while len(chosen) < min(count, len(u)):
+        i = int(np.argmax(dist))
+        if dist[i] < 1e-6:
+            break
+        chosen.append(i)
+        dist = np.minimum(dist, np.linalg.norm(u - u[i], axis=1))
+    return order[np.array(chosen)]
+
+
+def _limits():
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(1)
+
+
+def ga_task(index: int) -> RunResult:
+    """One GA island; returns its best point and the archive near it."""
+    objective: Objective = STATE["objective"]
+    options = STATE["options"]
+    counts, cancel = STATE["counts"], STATE["cancel"]
+    seed = np.random.SeedSequence(options.seed).spawn(options.islands)[index]
+    archive = Archive()
+    start = objective.evaluations
+
+    def on_generation(generation, best):
+        counts[index] = generation
+        return not cancel.is_set()
+
+    with _limits():
+        try:
+            ga = genetic_algorithm(
+                lambda U: objective.batch(unit_to_p(U)), len(NAMES), np.random.default_rng(seed), options.ga,
+                archive, on_generation,
+            )
+        except Cancelled:
+            au, af = archive.arrays()
+            return RunResult(au[0], float(af[0]), objective.evaluations - start, au[:0], af[:0], True)
+    counts[index] = options.ga.generations
+    au, af = archive.arrays()
+    # Polish starts and the near-optimal set come from the neighbourhood of the optimum only.
+    keep = af <= ga.value + options.polish_band + near_band(ga.value, options, n_modes(objective))
+    return RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep])
+
+
+def polish_task(u0: np.ndarray) -> RunResult:
+    """BOBYQA from one start; returns the polished point and its near-optimal trail."""
+    objective: Objective = STATE["objective"]
+    options = STATE["options"]
+    if STATE["cancel"].is_set():
+        return RunResult(u0, Objective.BAD, 0, np.empty((0, len(u0))), np.empty(0), True)
+    archive = Archive()
+    start = objective.evaluations
+    with _limits():
+        u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
+    au, af = archive.arrays()
+    keep = af <= value + near_band(value, options, n_modes(objective))
+    return RunResult(u, value, objective.evaluations - start, au[keep], af[keep])
+
+
+def walk_task(args) -> RunResult:
+    """A random walk through the near-optimal set from one member."""
+    index, start, scale, limits = args
+    objective: Objective = STATE["objective"]
+    options = STATE["options"]
+    if STATE["cancel"].is_set():
+        return RunResult(start, Objective.BAD, 0, np.empty((0, len(start))), np.empty(0), True)
+    seed = np.random.SeedSequence([options.seed, 7, index])
+    before = objective.evaluations
+    with _limits():
+        samples, _ = valley_walk(
+            lambda u: summed_terms(objective, unit_to_p, u), start, limits, scale,
+            np.random.default_rng(seed), steps=options.walk_steps,
+        )
+    # Walk samples carry no J of their own: rank them as equals after the best.
+    return RunResult(start, Objective.BAD, objective.evaluations - before, samples, np.full(len(samples), np.inf))
+
+
+def extreme_task(args) -> RunResult:
+    """The smallest or largest value of one parameter inside the near-optimal set."""
+    axis, sign, start, limits = args
+    objective: Objective = STATE["objective"]
+    options = STATE["options"]
+    if STATE["cancel"].is_set():
+        return RunResult(start, Objective.BAD, 0, np.empty((0, len(start))), np.empty(0), True)
+    with _limits():
+        found, evaluations = set_extreme(lambda u: summed_terms(objective, unit_to_p, u), start, axis, sign,
+                                         limits, options.extreme_evaluations)
+    ends = found[np.argsort(sign * found[:, axis])]
+    # The extreme member, and one half way there so the band is filled in.
+    keep = ends[[len(ends) // 2, -1]] if len(ends) > 1 else ends
+    return RunResult(ends[-1], Objective.BAD, evaluations, keep, np.full(len(keep), np.inf))
+
+
+def polish_starts(results: list[RunResult], options, modes: int) -> np.ndarray:
+    """Each island's best, then diverse good points of the archives (different places on the
+    valley of equally good fits, MODEL.md §8.6), up to ``options.polish_starts``."""
+    au = np.vstack([r.archive_u for r in results] + [r.u[None, :] for r in results])
+    af = np.concatenate([r.archive_f for r in results] + [[r.value] for r in results])
+    j_min = float(af.min())
+    good = af <= j_min + options.polish_band + near_band(j_min, options, modes)
+    starts = [r.u for r in sorted(results, key=lambda r: r.value)]
+    for i in select_diverse(au[good], af[good], options.polish_starts):
+        u = au[good][i]
+        if min(np.linalg.norm(u - s) for s in starts) > 0.05:
+            starts.append(u)
+    return np.array(starts[: max(options.polish_starts, len(results))])
+
+
+class _LocalFlag:
+    """A stand-in for multiprocessing.Event in the single-process path."""
+
+    def __init__(self):
+        self._set = False
+
+    def set(self):
+        self._set = True
+
+    def is_set(self):
+        return self._set
+
+
+class _ProgressFlag:
+    """Reports progress whenever an in-process task asks whether it was cancelled."""
+
+    def __init__(self, report, flag):
+        self.report, self.flag = report, flag
+
+    def set(self):
+        self.flag.set()
+
+    def is_set(self):
+        self.report()
+        return self.flag.is_set()
+
+
+class Workers:
+    """Runs the search phases on forked worker processes (or in-process) and reports progress.
+
+    Use as a context manager; ``map(fn, items)`` runs one phase, raising
+    :class:`Cancelled` when the progress callback asked to stop.
+    """
+
+    def __init__(self, objective: Objective, options, progress=None):
+        jobs = max(1, options.jobs or min(options.islands, os.cpu_count() or 1))
+        use_processes = jobs > 1 and "fork" in mp.get_all_start_methods()
+        self.ctx = mp.get_context("fork") if use_processes else None
+        self.jobs = jobs
+        self.counts = self.ctx.Array("i", options.islands, lock=False) if self.ctx else [0] * options.islands
+        self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
+        self.total = options.islands * options.ga.generations
+        self.progress = progress
+        self.phase = (0.05, 0.75, "fitting the model")
+        STATE.update(objective=objective, options=options, counts=self.counts,
+                     cancel=self.cancel if self.ctx else _ProgressFlag(self.report, self.cancel))
+        self.pool = self.ctx.Pool(jobs) if self.ctx else None
+
+    def report(self) -> None:
+        base, span, message = self.phase
+        fraction = base + span * min(1.0, sum(self.counts) / self.total)
+        if self.progress is not None and self.progress(fraction, message) is False:
+            self.cancel.set()
+
+    def map(self, fn, items, phase=None) -> list[RunResult]:
+        if phase is not None:
+            self.phase = phase
+            self.report()
+        items = list(items)
+        if self.pool is None:
+            out = []
+            for item in items:
+                out.append(fn(item))
+                if self.cancel.is_set():
+                    break
+        else:
+            pending = self.pool.map_async(fn, items, chunksize=1)
+            while not pending.ready():
+                pending.wait(0.1)
+                self.report()
+            out = pending.get()
+        if self.cancel.is_set() or any(r.cancelled for r in out):
+            raise Cancelled()
+        return out
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.pool is not None:
+            self.pool.terminate()
+        STATE.clear()
+        return False
+
+
+def near_optimal_set(objective: Objective, workers: Workers, results: list[RunResult], best: RunResult, options):
+    """The best fit first, then up to ``near_count − 1`` diverse members of the near-optimal set,
+    from the archives and from random walks through the set. Returns (unit points, evaluations)."""
+    modes = n_modes(objective)
+    au = np.vstack([r.archive_u for r in results] + [best.u[None, :]])
+    af = np.concatenate([r.archive_f for r in results] + [[best.value]])
+    j_min = float(min(af.min(), best.value))
+    pool = af <= j_min + near_band(j_min, options, modes)
+    pick = select_diverse(au[pool], af[pool], options.near_candidates)
+    cand_u, cand_f = au[pool][pick], af[pool][pick]
+    f_best, s_best = summed_terms(objective, unit_to_p, best.u)
+    limits = SetLimits(f_best + modes * options.near_frequency, options.near_shape_factor * s_best + options.near_shape_abs)
+    terms = np.array([summed_terms(objective, unit_to_p, u) for u in cand_u])
+    evaluations = len(cand_u) + 1
+    ok = (terms[:, 0] <= limits.frequency) & (terms[:, 1] <= limits.shape)
+    members, values = np.vstack([best.u, cand_u[ok]]), np.concatenate([[-np.inf], cand_f[ok]])
+    if options.extremes:
+        tasks = [(axis, sign, best.u, limits) for axis in range(len(NAMES)) for sign in (-1.0, 1.0)]
+        ends = workers.map(extreme_task, tasks, phase=(0.85, 0.0, "measuring the uncertainty"))
+        evaluations += sum(e.evaluations for e in ends)
+        found = np.vstack([e.archive_u for e in ends])
+        members = np.vstack([members, found])
+        values = np.concatenate([values, np.full(len(found), np.inf)])
+    if options.walks and options.walk_steps:
+        from taptune.identify.uncertainty import proposal_scale
+
+        scale = proposal_scale(members)
+        far = select_diverse(members, values, options.walks)
+        starts = [members[i] for i in far] + [best.u] * (options.walks - len(far))
+        walks = workers.map(walk_task, [(i, s, scale, limits) for i, s in enumerate(starts)],
+                            phase=(0.9, 0.0, "sampling the uncertainty"))
+        evaluations += sum(w.evaluations for w in walks)
+        walked = np.vstack([w.archive_u for w in walks])
+        members = np.vstack([members, walked])
+        values = np.concatenate([values, np.full(len(walked), np.inf)])
+    keep = select_diverse(members, values, options.near_count)  # the best first (value −inf)
+    return members[keep], evaluations

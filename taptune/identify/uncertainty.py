@@ -1,0 +1,133 @@
+"""The near-optimal set: every parameter vector that explains the measurement as well as the best.
+
+Three frequencies and one peak shape do not pin seven parameters (MODEL.md §8.6): the
+good fits form a long, curved valley. Its members are defined term by term against the
+best fit (see :class:`~taptune.identify.core.IdentifyOptions`): the frequency term may
+exceed the best's by what the measured peaks support, the shape term may reach a
+multiple of the best's, because it is dominated by the systematic difference between
+the sound and the tool-tip receptance. The valley can run to the edge of the search space
+(a contact so stiff that the frequencies no longer feel it), far beyond what an optimiser's
+archive visits, so its extent is measured directly: for every parameter, the smallest and
+the largest value inside the set (:func:`set_extreme`, a constrained COBYLA run). An
+adaptive random walk through the set (:func:`valley_walk`) is the alternative for a
+denser sample. Predictions over these members give honest uncertainty bands.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SetLimits:
+    """Upper limits of the frequency and the shape term (summed over recordings) for set members."""
+
+    frequency: float
+    shape: float
+
+    def contains(self, terms: np.ndarray) -> bool:
+        return bool(terms[0] <= self.frequency and terms[1] <= self.shape)
+
+
+def summed_terms(objective, u_to_p, u) -> np.ndarray:
+    """(frequency term, shape term) summed over the objective's recordings at unit point u."""
+    return np.sum(objective.terms(u_to_p(u)), axis=0)
+
+
+def proposal_scale(members: np.ndarray, floor: float = 1e-3) -> np.ndarray:
+    """Cholesky factor of the proposal covariance: the members' covariance × 2.38²/d (Haario et al.)."""
+    d = members.shape[1]
+    cov = np.cov(members.T) if len(members) > d else np.zeros((d, d))
+    cov = cov * 2.38**2 / d + np.eye(d) * floor**2
+    return np.linalg.cholesky(cov)
+
+
+def valley_walk(terms_at, start: np.ndarray, limits: SetLimits, scale: np.ndarray, rng: np.random.Generator,
+                steps: int = 400, adapt_every: int = 100):
+    """Random walk uniform over {u in [0,1]^d : terms_at(u) within limits}.
+
+    Parameters
+    ----------
+    terms_at : callable
+        u → (frequency term, shape term).
+    start : ndarray, shape (d,)
+        A member of the set.
+    scale : ndarray, shape (d, d)
+        Cholesky factor of the initial proposal covariance; re-estimated from the walk's
+        own samples every ``adapt_every`` steps, and shrunk or grown to keep about a
+        quarter of the proposals inside.
+
+    Returns
+    -------
+    samples : ndarray, shape (k, d)
+        Distinct accepted states (the start included).
+    evaluations : int
+    """
+    d = len(start)
+    u = np.asarray(start, dtype=float).copy()
+    samples = [u.copy()]
+    factor, accepted, tried, evaluations = 1.0, 0, 0, 0
+    for step in range(1, steps + 1):
+        proposal = u + factor * (scale @ rng.standard_normal(d))
+        tried += 1
+        inside = bool(np.all(proposal >= 0.0) and np.all(proposal <= 1.0))
+        evaluations += inside
+        if inside and limits.contains(terms_at(proposal)):
+            u = proposal
+            samples.append(u.copy())
+            accepted += 1
+        if step % adapt_every == 0:
+            rate = accepted / tried
+            factor *= 1.5 if rate > 0.35 else (0.6 if rate < 0.15 else 1.0)
+            if len(samples) > 2 * d:
+                scale = proposal_scale(np.array(samples))
+            accepted = tried = 0
+    return np.array(samples), evaluations
+
+
+def set_extreme(terms_at, start: np.ndarray, quantity, sign: float, limits: SetLimits,
+                max_evaluations: int = 150):
+    """Push ``quantity(u)`` as low (sign −1) or high (+1) as the set allows.
+
+    Constrained COBYLA (nlopt) on [0, 1]^d from a member ``start``: maximise
+    sign·quantity(u) subject to both terms staying within ``limits``. ``quantity`` is a
+    coordinate index or a callable (e.g. a predicted frequency at another stick-out,
+    relative to its value at ``start``).
+
+    Returns
+    -------
+    members : ndarray, shape (k, d)
+        The members of the set met on the way, in the order met (the start first).
+    evaluations : int
+    """
+    import nlopt
+
+    d = len(start)
+    cache: dict = {}
+    found = [np.asarray(start, dtype=float).copy()]
+
+    def terms(u):
+        key = u.tobytes()
+        if key not in cache:
+            cache[key] = terms_at(u)
+            if limits.contains(cache[key]):
+                found.append(u.copy())
+        return cache[key]
+
+    opt = nlopt.opt(nlopt.LN_COBYLA, d)
+    opt.set_lower_bounds(np.zeros(d))
+    opt.set_upper_bounds(np.ones(d))
+    value = (lambda u: float(u[quantity])) if isinstance(quantity, (int, np.integer)) else quantity
+    opt.set_min_objective(lambda u, grad: -sign * value(np.array(u)))
+    opt.add_inequality_constraint(lambda u, grad: float(terms(np.array(u))[0] - limits.frequency), 0.0)
+    opt.add_inequality_constraint(lambda u, grad: float(terms(np.array(u))[1] - limits.shape), 0.0)
+    opt.set_maxeval(int(max_evaluations))
+    opt.set_xtol_abs(1e-4)
+    opt.set_initial_step(np.full(d, 0.05))
+    try:
+        opt.optimize(np.clip(start, 0.0, 1.0))
+    except (nlopt.RoundoffLimited, ValueError, RuntimeError):
+        pass  # keep the members found so far
+    return np.array(found), len(cache)
