@@ -25,35 +25,6 @@ def add_parser(sub, name, help_text):
     return p
 
 
-#: Plausible spread of each holder parameter around the nominal values (MODEL.md §8.1):
-#: (name, step); k_tt and k_rr in decades. The labels use how far each bending mode
-#: moves per spread.
-PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
-                    ("density_factor", 0.03), ("alpha", 15.0))
-
-
-def model_guidance(assembly):
-    """Model bending frequencies with nominal parameters (3,), their physical bounds
-    (3, 2) and their shift per plausible parameter spread (3, 5) [Hz]."""
-    from dataclasses import replace
-
-    import numpy as np
-
-    from taptune.model import ModelOptions, analyse, bending_bounds
-    from taptune.model.params import NOMINAL
-
-    options = ModelOptions()
-    expected = np.asarray(analyse(assembly, NOMINAL, options).bending_hz[:3], dtype=float)
-    bounds = np.asarray(bending_bounds(assembly, options), dtype=float)
-    spread = np.zeros((expected.size, len(PARAMETER_SPREAD)))
-    for k, (name, step) in enumerate(PARAMETER_SPREAD):
-        value = getattr(NOMINAL, name)
-        moved = value * 10**step if name in ("k_tt", "k_rr") else value + step
-        f = np.asarray(analyse(assembly, replace(NOMINAL, **{name: moved}), options).bending_hz[:3])
-        spread[:, k] = f[:expected.size] - expected
-    return expected, bounds, spread
-
-
 def print_summary(analysis, stream=None) -> None:
     """Peaks as a table, bending frequencies and warnings, for people."""
     from taptune.cli.common import format_table
@@ -98,7 +69,9 @@ def run(args) -> int:
 
         assembly = load_assembly(args.assembly)
         interface = args.interface or assembly.holder.interface
-        expected, bounds, spread = model_guidance(assembly)
+        from taptune.identify.pipeline import model_expectation
+
+        expected, bounds, spread = model_expectation(assembly)
     analysis = analyse_recording(recording, interface=interface, expected_hz=expected,
                                  bounds_hz=bounds, options=options, interface_tap=interface_tap,
                                  spread_hz=spread)

@@ -12,14 +12,41 @@ import numpy as np
 from taptune.model.params import NOMINAL, HolderParams
 
 
+#: Plausible spread of each holder parameter around the nominal values (MODEL.md §8.1):
+#: (name, step); k_tt and k_rr in decades. The labels use how far each bending mode
+#: moves per spread.
+PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
+                    ("density_factor", 0.03), ("alpha", 15.0))
+
+
 def model_expectation(assembly, params: HolderParams | None = None, model_options=None):
-    """Expected bending frequencies [Hz] (3,) and their physical bounds [Hz] (3, 2)."""
-    from taptune.model import ModelOptions, analyse, bending_bounds
+    """What the model expects of a recording of ``assembly``, for the peak labels.
+
+    Returns
+    -------
+    expected : ndarray, shape (3,)
+        Bending frequencies [Hz] with ``params`` (nominal by default).
+    bounds : ndarray, shape (3, 2)
+        Their physical bounds [Hz] (MODEL.md §7.6).
+    spread : ndarray, shape (3, len(PARAMETER_SPREAD))
+        How far each mode moves [Hz] per plausible parameter change.
+    """
+    from dataclasses import replace
+
+    from taptune.model import ModelOptions, analyse, bending_bounds, build_model
 
     options = model_options or ModelOptions()
-    expected = np.asarray(analyse(assembly, params or NOMINAL, options).bending_hz[:3], dtype=float)
+    params = params or NOMINAL
+    fe = build_model(assembly, options)
+    expected = np.asarray(analyse(assembly, params, options, fe=fe).bending_hz[:3], dtype=float)
     bounds = np.asarray(bending_bounds(assembly, options), dtype=float)
-    return expected, bounds
+    spread = np.zeros((expected.size, len(PARAMETER_SPREAD)))
+    for k, (name, step) in enumerate(PARAMETER_SPREAD):
+        value = getattr(params, name)
+        moved = value * 10**step if name in ("k_tt", "k_rr") else value + step
+        f = np.asarray(analyse(assembly, replace(params, **{name: moved}), options, fe=fe).bending_hz[:3])
+        spread[:, k] = f[: expected.size] - expected
+    return expected, bounds, spread
 
 
 def analyse_for_assembly(recording, assembly=None, params: HolderParams | None = None, model_options=None, **kwargs):
@@ -31,9 +58,9 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
 
     if assembly is None:
         return analyse_recording(recording, **kwargs)
-    expected, bounds = model_expectation(assembly, params, model_options)
+    expected, bounds, spread = model_expectation(assembly, params, model_options)
     kwargs.setdefault("interface", assembly.holder.interface)
-    return analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, **kwargs)
+    return analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, spread_hz=spread, **kwargs)
 
 
 def identify_recordings(recordings, assemblies, options=None, progress=None, library_params=None):
