@@ -54,8 +54,10 @@ class IdentifyOptions:
     near_candidates: int = 300  # archive points re-evaluated term by term
     # The set's extent: each parameter pushed low and high inside it (a long valley runs
     # far beyond what the optimisers' archives visit).
-    extremes: bool = True
-    extreme_evaluations: int = 600
+    # k_tt, k_rr, alpha and the two factors set the frequencies; the loss intensities
+    # hardly move them and are left to the archive members.
+    extreme_axes: tuple[int, ...] = (0, 1, 4, 5, 6)
+    extreme_evaluations: int = 450
     walks: int = 0  # optional random walks through the set (uncertainty.valley_walk)
     walk_steps: int = 400
     near_count: int = 24  # how many diverse members the set keeps (best included)

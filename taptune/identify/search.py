@@ -266,8 +266,8 @@ def near_optimal_set(objective: Objective, workers: Workers, results: list[RunRe
     evaluations = len(cand_u) + 1
     ok = (terms[:, 0] <= limits.frequency) & (terms[:, 1] <= limits.shape)
     members, values = np.vstack([best.u, cand_u[ok]]), np.concatenate([[-np.inf], cand_f[ok]])
-    if options.extremes:
-        tasks = [(axis, sign, best.u, limits) for axis in range(len(NAMES)) for sign in (-1.0, 1.0)]
+    if options.extreme_axes:
+        tasks = [(axis, sign, best.u, limits) for axis in options.extreme_axes for sign in (-1.0, 1.0)]
         ends = workers.map(extreme_task, tasks, phase=(0.85, 0.0, "measuring the uncertainty"))
         evaluations += sum(e.evaluations for e in ends)
         found = np.vstack([e.archive_u for e in ends])
