@@ -78,7 +78,8 @@ def main() -> None:
         cpu.append(time.process_time() - c0)
     wall, cpu = np.array(wall), np.array(cpu)
     print(f"{args.count / np.median(wall):.0f} evaluations/s "
-          f"(f1–f3, ζ1–ζ3 and H on 201 points per candidate; wall median; best run {args.count / wall.min():.0f}; "
+          f"(f1–f3, ζ1–ζ3 and H on 201 points per candidate; wall median; "
+          f"best run {args.count / wall.min():.0f}; "
           f"{args.count / np.median(cpu):.0f} per CPU-second, which a busy machine affects less)")
     iterations = np.array([ev.evaluate(p, window).iterations for p in points])
     print(f"inverse iterations per candidate: mean {iterations.mean():.2f}, max {iterations.max()}, "

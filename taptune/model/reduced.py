@@ -43,7 +43,7 @@ from scipy.linalg.lapack import zgeqrf, zgetrf, zgetrs, zungqr
 from taptune.io.assembly import Assembly
 from taptune.model.fe import FEModel, build_model
 from taptune.model.options import ModelOptions
-from taptune.model.params import ETA_REFERENCE_MM, LOG_PARAMS, P_LOWER, P_UPPER
+from taptune.model.params import ETA_REFERENCE_MM, P_LOWER, P_UPPER
 
 # Shift of the inverse iteration [rad²/s²]: below the rigid-body pair, so K̃ − σM is
 # regular although the model is free-free (the same shift as the full model's solver).
@@ -189,9 +189,11 @@ def contact_line_loads(fe: FEModel, n_terms: int) -> np.ndarray:
 
 
 def component_basis(fe: FEModel, options: ReductionOptions = ReductionOptions()) -> np.ndarray:
-    """Per-body Craig–Bampton-like basis of the full model, shape (n_dofs, n).
+    """Free-interface component basis of the full model, shape (n_dofs, n).
 
-    Block diagonal (holder columns, then tool columns), Euclidean-orthonormal.
+    Per body: its lowest free-free modes and the shifted static responses to the contact
+    line loads (and, for the tool, to a tip force). Block diagonal (holder columns, then
+    tool columns), Euclidean-orthonormal.
     """
     n_h = 2 * len(fe.z_holder)
     loads = contact_line_loads(fe, options.legendre_terms)
@@ -442,7 +444,12 @@ class FastEvaluator:
     >>> e.bending_hz, e.damping_ratio, abs(e.tip_receptance).max()    # doctest: +SKIP
     """
 
-    def __init__(self, assembly: Assembly, options: ModelOptions = ModelOptions(), reduction: ReductionOptions = ReductionOptions()):
+    def __init__(
+        self,
+        assembly: Assembly,
+        options: ModelOptions = ModelOptions(),
+        reduction: ReductionOptions = ReductionOptions(),
+    ):
         self._setup(build_model(assembly, options), reduction)
 
     @classmethod
