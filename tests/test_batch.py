@@ -171,7 +171,11 @@ def tiny(tmp_path, **kw) -> BatchOptions:
     return BatchOptions(out_dir=tmp_path / "out", library=str(tmp_path / "lib.json"), jobs=2, **TINY, **kw)
 
 
-def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monkeypatch):
+def junk_pair_with_a_misbehaving_worker(tmp_path, monkeypatch, misbehave) -> None:
+    """a.wav and b.wav (1 byte of junk each, with assemblies); the worker of a.wav runs ``misbehave()`` first.
+
+    Workers are forked, so they see the monkeypatched ``run_job``.
+    """
     import taptune.batch as batch
 
     for stem in ("a", "b"):
@@ -179,12 +183,17 @@ def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monk
         (tmp_path / f"{stem}.toml").write_text(assembly_text(stem))
     real = batch.run_job
 
-    def crash_on_a(items, options, progress=None):
+    def patched(items, options, progress=None):
         if items[0].path.name == "a.wav":
-            os._exit(3)  # what a segfault or the OOM killer looks like from outside
+            misbehave()
         return real(items, options, progress)
 
-    monkeypatch.setattr(batch, "run_job", crash_on_a)  # workers are forked: they see it
+    monkeypatch.setattr(batch, "run_job", patched)
+
+
+def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monkeypatch):
+    # os._exit is what a segfault or the OOM killer looks like from outside.
+    junk_pair_with_a_misbehaving_worker(tmp_path, monkeypatch, lambda: os._exit(3))
     result = run_batch([tmp_path], tiny(tmp_path))
     by_name = {Path(r.file).name: r for r in result.rows}
     assert by_name["a.wav"].status == "error"
@@ -196,19 +205,7 @@ def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monk
 def test_a_job_over_the_timeout_is_stopped_and_the_others_finish(tmp_path, monkeypatch):
     import time
 
-    import taptune.batch as batch
-
-    for stem in ("a", "b"):
-        (tmp_path / f"{stem}.wav").write_bytes(b"x")
-        (tmp_path / f"{stem}.toml").write_text(assembly_text(stem))
-    real = batch.run_job
-
-    def hang_on_a(items, options, progress=None):
-        if items[0].path.name == "a.wav":
-            time.sleep(60)
-        return real(items, options, progress)
-
-    monkeypatch.setattr(batch, "run_job", hang_on_a)
+    junk_pair_with_a_misbehaving_worker(tmp_path, monkeypatch, lambda: time.sleep(60))
     t0 = time.monotonic()
     result = run_batch([tmp_path], tiny(tmp_path, timeout_s=1.0))
     assert time.monotonic() - t0 < 30
