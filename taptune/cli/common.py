@@ -18,12 +18,17 @@ def write_json(data: dict, out: str | None) -> None:
     if out == "-":
         sys.stdout.write(text)
         return
+    import os
+    import tempfile
+
     path = Path(out)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(path)
+        # A unique temporary name: two runs may write into the same folder at once.
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
     except OSError as err:
         raise InputError(f"{out}: cannot write ({err.strerror})") from None
 

@@ -196,7 +196,7 @@ def identify(
     targets: list[Target] = []
     warnings: list[str] = []
     for analysis, asm in zip(analyses, assemblies):
-        label = getattr(analysis, "path", "") or asm.source
+        label = getattr(analysis, "file", None) or getattr(analysis, "path", "") or asm.source
         target = make_target(analysis.freq_hz, analysis.magnitude, bending_peaks(analysis), options.objective, label)
         targets.append(target)
         warnings.extend(target.warnings)
