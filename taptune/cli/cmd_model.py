@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import sys
-from pathlib import Path
 
 from taptune.errors import InputError
 
@@ -34,16 +33,9 @@ def read_params_file(path: str):
     """HolderParams from a JSON file; every problem is an InputError naming the file."""
     from taptune.model.params import HolderParams
 
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, not a parameter file") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file (expected JSON)") from None
-    except OSError as err:
-        raise InputError(f"{path}: cannot read ({err.strerror})") from None
+    from taptune.io.files import read_text
+
+    text = read_text(path, "a parameter file", "JSON")
     try:
         data = json.loads(text)
     except json.JSONDecodeError as err:

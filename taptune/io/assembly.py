@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from taptune.errors import InputError
+from taptune.io.files import read_text
 
 MM = 1e-3
 GPA = 1e9
@@ -358,20 +359,8 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
 
 def load_assembly(path: str | Path) -> Assembly:
     """Read and validate an assembly TOML file (ASSEMBLY-FORMAT.md)."""
-    path = Path(path)
     name = str(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a folder, not an assembly file") from None
-    except OSError as err:
-        raise InputError(f"{name}: cannot read ({err.strerror})") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise InputError(f"{name}: not a UTF-8 text file (an assembly file is TOML)") from None
+    text = read_text(path, "an assembly file", "TOML")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
