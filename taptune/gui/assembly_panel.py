@@ -33,6 +33,7 @@ from PySide6.QtWidgets import (
 )
 
 from taptune.gui.assembly_drawing import AssemblyDrawing
+from taptune.gui.signals import emit
 
 MM = 1e-3
 INTERFACES = ("HSK-A63", "HSK-A100", "HSK-E40", "SK40", "BT40", "CAT40", "unknown")
@@ -110,7 +111,7 @@ class SegmentsTable(QTableWidget):
         self.horizontalHeader().setSectionResizeMode(QHeaderView.Stretch)
         self.verticalHeader().setDefaultSectionSize(22)
         self.setMinimumHeight(90)
-        self.itemChanged.connect(lambda _item: self.edited.emit())
+        self.itemChanged.connect(lambda _item: emit(self.edited))
 
     def set_segments(self, segments: list[dict]) -> None:
         self.blockSignals(True)
@@ -138,7 +139,7 @@ class SegmentsTable(QTableWidget):
     def add_row(self) -> None:
         last = self.segments()[-1] if self.rowCount() else {"length": 10.0, "od": 40.0, "id": 0.0}
         self.set_segments(self.segments() + [dict(last)])
-        self.edited.emit()
+        emit(self.edited)
 
     def remove_row(self) -> None:
         if self.rowCount() > 1:
@@ -146,7 +147,7 @@ class SegmentsTable(QTableWidget):
             rows = self.segments()
             del rows[row]
             self.set_segments(rows)
-            self.edited.emit()
+            emit(self.edited)
 
 
 class AssemblyPanel(QWidget):
@@ -415,7 +416,7 @@ class AssemblyPanel(QWidget):
         self.drawing.set_assembly(assembly, message)
         self.message.setText(message)
         self.message.setStyleSheet("color: #b00020;" if assembly is None else "color: #8a6d00;")
-        self.assembly_changed.emit(assembly)
+        emit(self.assembly_changed, assembly)
 
     # ------------------------------------------------------------------ files
 

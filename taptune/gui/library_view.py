@@ -24,6 +24,7 @@ from PySide6.QtWidgets import (
 from taptune.gui.fit_view import PARAM_ROWS
 from taptune.gui.layout import hsplit
 from taptune.gui.messages import show_error, show_info
+from taptune.gui.signals import emit
 
 COLUMNS = ("holder", "interface", "identifications", "last identified")
 
@@ -143,7 +144,7 @@ class LibraryView(QWidget):
         elif self.table.currentRow() < 0:
             self.table.selectRow(0)
         self._update_buttons()
-        self.changed.emit(self.entries)
+        emit(self.changed, self.entries)
 
     def selected(self):
         """The selected entry, or None."""
@@ -173,7 +174,7 @@ class LibraryView(QWidget):
     def _use(self) -> None:
         entry = self.selected()
         if entry is not None:
-            self.use_for_prediction.emit(entry)
+            emit(self.use_for_prediction, entry)
 
     def export_to(self, path, format: str | None = None) -> int | None:
         """Export the library (JSON or CSV from the suffix); a dialog reports the outcome."""

@@ -32,6 +32,7 @@ from taptune.gui.library_view import LibraryView
 from taptune.gui.messages import show_error
 from taptune.gui.predictor import Predictor, PredictorSource
 from taptune.gui.recorder_panel import RecorderPanel
+from taptune.gui.signals import emit
 from taptune.gui.spectrum_view import SpectrumView, relabel
 from taptune.gui.workers import TaskRunner
 
@@ -280,7 +281,7 @@ class MainWindow(QMainWindow):
         self.show_view("spectrum")
         self.statusBar().showMessage(f"Analysed {path}: {analysis.n_taps} taps used.")
         self._update_actions()
-        self.analysis_ready.emit(analysis)
+        emit(self.analysis_ready, analysis)
 
     def _analysis_failed(self, path: str, message: str) -> None:
         self._loading = None
@@ -288,7 +289,7 @@ class MainWindow(QMainWindow):
         self.statusBar().showMessage(f"Could not analyse {path}", 10000)
         show_error(self, "Cannot analyse the recording", message)
         self._update_actions()
-        self.load_failed.emit(message)
+        emit(self.load_failed, message)
 
     def relabel_peak(self, index: int, kind: str, mode) -> None:
         """Give peak ``index`` a new label (from a click in the spectrum)."""
@@ -360,22 +361,22 @@ class MainWindow(QMainWindow):
         self.statusBar().showMessage(
             f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
         self._update_actions()
-        self.identification_ready.emit(result)
-        self.identification_ended.emit("finished")
+        emit(self.identification_ready, result)
+        emit(self.identification_ended, "finished")
 
     def _identification_failed(self, message: str) -> None:
         self._identify_task = None
         self._set_progress(0, "failed")
         show_error(self, "Identification failed", message)
         self._update_actions()
-        self.identification_ended.emit("failed")
+        emit(self.identification_ended, "failed")
 
     def _identification_cancelled(self) -> None:
         self._identify_task = None
         self._set_progress(0, "cancelled")
         self.statusBar().showMessage("Identification cancelled.", 8000)
         self._update_actions()
-        self.identification_ended.emit("cancelled")
+        emit(self.identification_ended, "cancelled")
 
     # ------------------------------------------------------------------ library and prediction
 
@@ -398,7 +399,7 @@ class MainWindow(QMainWindow):
         self.library_view.refresh()
         self.library_view.select(entry.name)
         self.statusBar().showMessage(f"Saved {entry.name!r} to {self.library_view.library_path}.")
-        self.saved_to_library.emit(entry.name)
+        emit(self.saved_to_library, entry.name)
         return entry.name
 
     def use_library_entry(self, entry) -> None:

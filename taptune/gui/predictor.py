@@ -17,6 +17,7 @@ from PySide6.QtWidgets import QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QTab
 
 from taptune.gui.layout import read_only_table
 from taptune.gui.plotting import BENDING, MEASURED, PlotCanvas
+from taptune.gui.signals import emit
 from taptune.gui.workers import TaskRunner
 
 MM = 1e-3
@@ -171,7 +172,7 @@ class Predictor(QWidget):
     def _failed(self, message: str) -> None:
         self.canvas.message(f"Cannot predict here:\n{message}")
         self.table.clearContents()
-        self.failed.emit(message)
+        emit(self.failed, message)
         self._next()
 
     def _done(self, result) -> None:
@@ -211,7 +212,7 @@ class Predictor(QWidget):
             ax.set_title(f"Free-free tip receptance at stick-out {stickout_mm:.1f} mm (best-fit parameters; "
                          "bands: f1–f3 ± spread)", loc="left")
         self.canvas.draw_idle()
-        self.predicted.emit(prediction)
+        emit(self.predicted, prediction)
 
     def shutdown(self) -> None:
         self._pending = None

@@ -30,6 +30,8 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from taptune.gui.signals import emit
+
 METER_FLOOR_DB = -80.0
 
 
@@ -79,18 +81,18 @@ class RecorderWorker(QObject):
                 events = self.recorder.poll(timeout=0.05)
                 levels = [e for e in events if e.kind == "level"]
                 if levels:
-                    self.level.emit(max(e.level_db for e in levels), levels[-1].threshold_db)
+                    emit(self.level, max(e.level_db for e in levels), levels[-1].threshold_db)
                 if not ready and self.recorder.trigger.ready:
                     ready = True
-                    self.event.emit("ready", 0, 0.0, "")
+                    emit(self.event, "ready", 0, 0.0, "")
                 for e in events:
                     if e.kind in ("tap", "rejected", "saved"):
-                        self.event.emit(e.kind, e.index, e.level_db, e.message)
+                        emit(self.event, e.kind, e.index, e.level_db, e.message)
         except Exception as err:  # noqa: BLE001 - a device error or anything else ends the recording with a message
             error = describe_error(err)
         finally:
             self.recorder.close()
-        self.ended.emit(str(self.recorder.out_path), self.recorder.saved_taps, error)
+        emit(self.ended, str(self.recorder.out_path), self.recorder.saved_taps, error)
 
 
 class RecorderPanel(QWidget):
@@ -316,8 +318,8 @@ class RecorderPanel(QWidget):
         else:
             self._set_state("Stopped before any tap was heard.")
         if taps:
-            self.status.emit(f"Recording saved: {path}")
-            self.recorded.emit(path)
+            emit(self.status, f"Recording saved: {path}")
+            emit(self.recorded, path)
 
     def _set_state(self, text: str, error: bool = False) -> None:
         self.state.setText(text)

@@ -15,6 +15,7 @@ from PySide6.QtGui import QCursor
 from PySide6.QtWidgets import QLabel, QMenu, QVBoxLayout, QWidget
 
 from taptune.gui.plotting import BAND, BENDING, LOCAL, MEASURED, OTHER, TAPS, PlotCanvas
+from taptune.gui.signals import emit
 
 # A click selects the nearest peak within this many pixels.
 PICK_RADIUS_PX = 12
@@ -193,6 +194,6 @@ class SpectrumView(QWidget):
             action = menu.addAction(text)
             action.setCheckable(True)
             action.setChecked(peak.kind == kind and peak.mode == mode)
-            action.triggered.connect(lambda _=False, k=kind, m=mode: self.relabel_requested.emit(index, k, m))
+            action.triggered.connect(lambda _=False, k=kind, m=mode: emit(self.relabel_requested, index, k, m))
         menu.popup(QCursor.pos())
         self._menu = menu  # keep it alive while shown

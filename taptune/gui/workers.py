@@ -15,6 +15,8 @@ from typing import Callable
 
 from PySide6.QtCore import QObject, QThread, Signal, Slot
 
+from taptune.gui.signals import emit
+
 log = logging.getLogger(__name__)
 
 
@@ -64,7 +66,7 @@ class TaskWorker(QObject):
         return self._cancel.is_set()
 
     def _report(self, fraction: float, message: str = "") -> bool:
-        self.progress.emit(float(fraction), str(message))
+        emit(self.progress, float(fraction), str(message))
         return not self._cancel.is_set()
 
     @Slot()
@@ -84,15 +86,15 @@ class TaskWorker(QObject):
             result = self._fn(*self._args, **kwargs)
         except BaseException as err:  # noqa: BLE001 - every failure must reach the user as a message
             if self._cancel.is_set():
-                self.cancelled.emit()
+                emit(self.cancelled)
             else:
                 log.error("background task failed:\n%s", traceback.format_exc())
-                self.failed.emit(describe_error(err))
+                emit(self.failed, describe_error(err))
             return
         if self._cancel.is_set():
-            self.cancelled.emit()
+            emit(self.cancelled)
         else:
-            self.finished.emit(result)
+            emit(self.finished, result)
 
 
 class Task(QObject):
@@ -136,7 +138,7 @@ class Task(QObject):
             if callback is not None:
                 callback(*args)
         finally:
-            self.done.emit()
+            emit(self.done)
 
     @Slot(object)
     def _finished(self, result) -> None:
