@@ -12,8 +12,12 @@ import sys
 SCREENSHOT_TIMEOUT_S = 300
 
 
+def _no_display() -> bool:
+    return sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def _ensure_platform() -> None:
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+    if _no_display():
         os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
 
@@ -93,6 +97,12 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
     """
+    if not screenshot and _no_display() and os.environ.get("QT_QPA_PLATFORM", "offscreen") == "offscreen":
+        from taptune.errors import TaptuneError
+
+        # An invisible window would wait forever: say so instead.
+        raise TaptuneError("no display to show the window on (DISPLAY is not set); run it on the desktop, "
+                           "or use --screenshot PNG to render the window to a file")
     app = application()
     from taptune.gui.main_window import MainWindow
     from taptune.library import default_library_path

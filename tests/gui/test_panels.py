@@ -142,3 +142,13 @@ def test_an_error_escaping_a_callback_becomes_a_message(window):
         sys.excepthook = previous
     title, text = messages.history[-1]
     assert title == "Something went wrong" and "ValueError: bad value" in text and "unchanged" in text
+
+
+def test_without_a_display_the_window_is_not_opened_invisibly(monkeypatch, capsys):
+    from taptune.cli import main
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
+    assert main(["gui"]) == 1
+    assert "no display" in capsys.readouterr().err
