@@ -94,8 +94,8 @@ class Predictor(QWidget):
         self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ % (± spread)"])
         self.table.setMinimumWidth(420)
         self.note = QLabel(
-            "The spread is the half-width of the band that holds the predictions of every "
-            "near-optimal fit: the tap cannot tell those fits apart."
+            "Values from the best fit; the spread is the largest deviation of any other "
+            "near-optimal fit from it: the tap cannot tell those fits apart."
         )
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #555555;")
