@@ -114,3 +114,15 @@ def test_one_assembly_per_recording_and_one_holder_are_required(reference_fit):
     other = replace(asm, holder=replace(asm.holder, name="another holder"))
     with pytest.raises(InputError, match="one holder"):
         identify([analysis, analysis], [asm, other])
+
+
+def test_different_seeds_predict_within_each_others_bands(reference_fit):
+    """Another seed lands elsewhere on the valley of equally good fits; its predictions must
+    agree with the first within the reported spreads (the bands overlap)."""
+    asm, analysis, first = reference_fit
+    second = identify([analysis], [asm], IdentifyOptions(seed=11))
+    for stickout_mm in sorted(TRANSFER):
+        target = asm.with_stickout(stickout_mm * 1e-3)
+        a, b = predict(first.param_sets, target), predict(second.param_sets, target)
+        gap = np.abs(np.array(a.bending_hz) - np.array(b.bending_hz))
+        assert np.all(gap <= np.array(a.bending_hz_spread) + np.array(b.bending_hz_spread)), (stickout_mm, a, b)
