@@ -22,7 +22,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.identify.objective import Objective, ObjectiveOptions, Target, make_target, model_shape
+from taptune.identify.objective import Objective, ObjectiveOptions, Target, make_target, model_shape, objective_terms
 from taptune.identify import search
 from taptune.identify.optimize import Cancelled, GAOptions
 from taptune.model.params import NAMES, HolderParams, from_p, p_to_unit, to_p, unit_to_p
@@ -210,10 +210,9 @@ def identify(
     objective = Objective(targets, evaluators, options.objective)
 
     say(0.05, "fitting the model")
-    modes = search.n_modes(objective)
     with search.Workers(objective, options, progress) as workers:
         islands = workers.map(search.ga_task, range(options.islands))
-        starts = search.polish_starts(islands, options, modes)
+        starts = search.polish_starts(islands, options, search.n_modes(objective))
         polished = workers.map(search.polish_task, starts, phase=(0.8, 0.0, "polishing the best fits"))
         best = min(polished, key=lambda r: r.value)
         members, extra = search.near_optimal_set(objective, workers, islands + polished, best, options)
@@ -235,8 +234,6 @@ def identify(
         window.append(target.window_hz)
         meas_shape.append(target.shape)
         mod_shape.append(model_shape(target.window_hz, h, options.objective))
-        from taptune.identify.objective import objective_terms
-
         terms.append(objective_terms(target, fm, h, options.objective))
         misfit = np.abs(fm[np.asarray(target.modes) - 1] / target.measured_hz - 1)
         if misfit.max() > 0.001:
@@ -246,7 +243,10 @@ def identify(
             )
     at_bound = [n for n, u in zip(NAMES, p_to_unit(to_p(params))) if (u < 1e-3 or u > 1 - 1e-3) and n not in ("eta_tt", "eta_rr")]
     if at_bound:
-        warnings.append(f"identified {', '.join(at_bound)} at the edge of the search space: the assembly description may be off")
+        warnings.append(
+            f"identified {', '.join(at_bound)} at the edge of the search space: the tap cannot tell values beyond it "
+            "apart (e.g. an effectively rigid contact), or the assembly description is off"
+        )
     say(1.0, "done")
     return Identification(
         params=params,
