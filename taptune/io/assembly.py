@@ -431,20 +431,25 @@ def assembly_to_toml(asm: Assembly) -> str:
     )
 
 
+def material_to_dict(m: Material) -> dict:
+    """A material as plain JSON-able data (kg/m³, GPa)."""
+    return {"density": m.density, "youngs_modulus": m.youngs_modulus / GPA, "poisson": m.poisson,
+            "loss_factor": m.loss_factor}
+
+
+def segments_to_list(segments) -> list[dict]:
+    """Segments as plain JSON-able data (mm)."""
+    return [{"length": s.length / MM, "od": s.od / MM, "id": s.id / MM} for s in segments]
+
+
 def holder_to_dict(holder: Holder) -> dict:
     """Holder geometry as plain JSON-able data (mm, GPa), for the holder library."""
-    m = holder.material
     return {
         "name": holder.name,
         "interface": holder.interface,
         "clamp_length": holder.clamp_length / MM,
-        "material": {
-            "density": m.density,
-            "youngs_modulus": m.youngs_modulus / GPA,
-            "poisson": m.poisson,
-            "loss_factor": m.loss_factor,
-        },
-        "segments": [{"length": s.length / MM, "od": s.od / MM, "id": s.id / MM} for s in holder.segments],
+        "material": material_to_dict(holder.material),
+        "segments": segments_to_list(holder.segments),
     }
 
 

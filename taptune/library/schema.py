@@ -50,6 +50,8 @@ from taptune.io.assembly import (
     Segment,
     Tool,
     holder_from_dict,
+    material_to_dict,
+    segments_to_list,
     validate,
 )
 from taptune.model.params import NAMES, HolderParams
@@ -270,17 +272,11 @@ def check_date(value, src: str, key: str) -> str:
 
 def tool_to_dict(tool: Tool) -> dict:
     """Tool geometry as plain JSON-able data (mm, GPa); kept with each identification."""
-    m = tool.material
     out = {
         "name": tool.name,
         "total_length": tool.total_length / MM,
-        "material": {
-            "density": m.density,
-            "youngs_modulus": m.youngs_modulus / GPA,
-            "poisson": m.poisson,
-            "loss_factor": m.loss_factor,
-        },
-        "segments": [{"length": s.length / MM, "od": s.od / MM, "id": s.id / MM} for s in tool.segments],
+        "material": material_to_dict(tool.material),
+        "segments": segments_to_list(tool.segments),
     }
     for k in ("shank_diameter", "flute_length", "flute_diameter"):
         if getattr(tool, k) is not None:
