@@ -32,19 +32,34 @@ def bundled_recordings() -> Path:
     return Path(__file__).resolve().parents[2] / "recordings"
 
 
+def _read_json(path: Path, what: str):
+    from taptune.errors import InputError
+    from taptune.io.files import read_text
+
+    try:
+        return json.loads(read_text(path, what, "JSON"))
+    except json.JSONDecodeError as err:
+        raise InputError(f"{path}: not valid JSON ({err.msg} at line {err.lineno})") from None
+
+
 def load_manifest(folder: Path) -> list[dict]:
+    """The examples of ``folder/demo.json``, checked: recording, assembly, stick-outs [mm]."""
     from taptune.errors import InputError
 
     path = folder / "demo.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        cases = data["cases"]
-        for c in cases:
-            c["recording"], c["assembly"], c["predict_stickouts_mm"]  # noqa: B018 (presence check)
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file (the demo needs the bundled recordings; run scripts/make_recordings.py)") from None
-    except (ValueError, KeyError, TypeError) as err:
-        raise InputError(f"{path}: not a demo manifest ({err})") from None
+    if not path.exists():
+        raise InputError(f"{path}: no such file (the demo needs the bundled recordings; run scripts/make_recordings.py)")
+    data = _read_json(path, "a demo manifest")
+    cases = data.get("cases") if isinstance(data, dict) else None
+    if not isinstance(cases, list) or not cases:
+        raise InputError(f"{path}: not a demo manifest (needs a non-empty list 'cases')")
+    for i, c in enumerate(cases):
+        ok = isinstance(c, dict) and all(isinstance(c.get(k), str) for k in ("recording", "assembly"))
+        stickouts = c.get("predict_stickouts_mm") if isinstance(c, dict) else None
+        ok = ok and isinstance(stickouts, list) and all(
+            isinstance(s, (int, float)) and not isinstance(s, bool) for s in stickouts)
+        if not ok:
+            raise InputError(f"{path}: cases[{i}] needs 'recording', 'assembly' and a list 'predict_stickouts_mm' of numbers")
     return cases
 
 
@@ -74,6 +89,7 @@ def run(args) -> int:
             wav, toml = folder / case["recording"], folder / case["assembly"]
             assembly = load_assembly(toml)
             recording = read_audio(wav)
+            truth = _truth(folder, case)
             print(f"== {case.get('name', wav.stem)}: {case.get('description', '')}")
             print(f"tap recording  {wav.name}  ({recording.sample_rate} Hz, {recording.samples.shape[0] / recording.sample_rate:.1f} s)")
             print(f"assembly       {assembly.holder.name}\n               {assembly.tool.name}, stick-out {assembly.stickout * 1e3:g} mm")
@@ -91,7 +107,6 @@ def run(args) -> int:
             entry = HolderLibrary(library_path).get(name)
             stickouts = [assembly.stickout * 1e3] + list(case["predict_stickouts_mm"])
             predictions, _ = predict_stickouts(entry, assembly, stickouts)
-            truth = _truth(folder, case)
             rows = []
             for p in predictions:
                 row = [f"{p.stickout_mm:g}"] + [f"{f:.0f} ± {s:.0f}" for f, s in zip(p.bending_hz, p.bending_hz_spread)]
@@ -111,8 +126,14 @@ def run(args) -> int:
 
 def _truth(folder: Path, case: dict) -> dict:
     """True f1–f3 by stick-out ("53.5" → [f1, f2, f3]) from the case's truth file, if any."""
-    path = folder / case.get("truth", "")
-    if not case.get("truth") or not path.is_file():
+    from taptune.errors import InputError
+
+    if not case.get("truth"):
         return {}
-    data = json.loads(path.read_text(encoding="utf-8"))
-    return {f"{float(k):g}": v for k, v in data.get("bending_hz_by_stickout", {}).items()}
+    path = folder / case["truth"]
+    data = _read_json(path, "a truth file")
+    table = data.get("bending_hz_by_stickout", {}) if isinstance(data, dict) else None
+    try:
+        return {f"{float(k):g}": [float(f) for f in v] for k, v in table.items()}
+    except (AttributeError, TypeError, ValueError):
+        raise InputError(f"{path}: bending_hz_by_stickout must map stick-outs to [f1, f2, f3]") from None

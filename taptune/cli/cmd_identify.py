@@ -77,14 +77,15 @@ def run(args) -> int:
     from taptune.identify.pipeline import identification_record
     from taptune.identify.optimize import Cancelled
 
-    for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
-        output_path(path, what)
-    recordings, assemblies = load_inputs(args.wav, args.assembly)
-    if not args.no_save:
-        from taptune.library.store import HolderLibrary, default_library_path
+    from taptune.library.store import HolderLibrary, default_library_path
 
+    library = None if args.no_save else default_library_path(args.library)
+    for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
+        output_path(path, what, protect=(library,))
+    recordings, assemblies = load_inputs(args.wav, args.assembly)
+    if library is not None:
         # A broken library is reported before the fit, not after it.
-        HolderLibrary(default_library_path(args.library)).entries()
+        HolderLibrary(library).entries()
     bar = ProgressBar("identify")
     try:
         analyses, result = run_identification(recordings, assemblies, args.seed, args.jobs, bar)

@@ -61,7 +61,7 @@ def holder_params(args):
         library = HolderLibrary(default_library_path(args.library))
         entry = library.get(args.holder)
         try:
-            options = ModelOptions.from_dict(entry.model_options or {})
+            options = entry.options()
         except (TypeError, ValueError) as err:
             raise InputError(f"{library.path}: holder {entry.name!r} has unusable model_options ({err})") from None
         return entry.params, options, f"library holder '{entry.name}'"

@@ -21,17 +21,8 @@ def add_parser(sub, name, help_text):
 
 def predict_stickouts(entry, assembly, stickouts_mm=None):
     """Predictions (one per stick-out) and the assemblies they were made for."""
-    from taptune.identify import predict
-
     assemblies = [assembly] if not stickouts_mm else [assembly.with_stickout(s * 1e-3) for s in stickouts_mm]
-    from taptune.model import ModelOptions
-
-    from taptune.identify.core import fit_misfit
-
-    options = ModelOptions.from_dict(entry.model_options)
-    floor = max([fit_misfit(r.bending_measured_hz, r.bending_model_hz) for r in entry.identifications] or [5e-4])
-    sets = entry.param_sets or (entry.params,)
-    return [predict(sets, a, options, relative_floor=floor) for a in assemblies], assemblies
+    return [entry.predict(a) for a in assemblies], assemblies
 
 
 def run(args) -> int:
@@ -49,6 +40,8 @@ def run(args) -> int:
             f"{args.assembly}: its holder is '{assembly.holder.name}', predicting with the contact of library holder '{entry.name}'"
         )
     predictions, assemblies = predict_stickouts(entry, assembly, args.stickout)
+    # Each stick-out has its own geometry warnings (e.g. flutes reaching into the holder).
+    warnings = list(dict.fromkeys(warnings + [w for a in assemblies for w in a.warnings]))
     out = {"holder": entry.name, "assembly": args.assembly, "tool": assembly.tool.name,
            "predictions": [p.to_dict() for p in predictions], "warnings": warnings}
     write_json(out, args.json)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 def add_parser(sub, name: str, help_text: str) -> None:
     p = sub.add_parser(name, help=help_text, description=help_text + ".")
-    p.add_argument("--out", required=True, metavar="WAV", help="the WAV file to write")
+    p.add_argument("--out", metavar="WAV", help="the WAV file to write (required unless --list-devices)")
     p.add_argument("--seconds", type=float, default=60.0, metavar="S",
                    help="stop waiting for taps after S seconds (default 60)")
     p.add_argument("--device", default=None, metavar="ID", help="input device number or part of its name (default: the system default)")
@@ -31,17 +31,27 @@ def run(args) -> int:
 
     try:
         if args.list_devices:
-            for device in recording.input_devices():
+            devices = recording.input_devices()
+            for device in devices:
                 print(device.label())
+            if not devices:
+                print("no audio input device found")
             return 0
+        if not args.out:
+            raise InputError("--out WAV is required (where to save the taps)")
+        from taptune.cli.common import output_path
+
+        output_path(args.out, "recording")
         if args.taps <= 0 or args.seconds <= 0 or args.sample_rate <= 0:
             raise InputError("--taps, --seconds and --sample-rate must be > 0")
         assembly_text = None
         if args.assembly:
-            from taptune.io.assembly import load_assembly
+            from taptune.io.assembly import assembly_from_toml
+            from taptune.io.files import read_text
 
-            load_assembly(args.assembly)  # validate before waiting for taps
-            assembly_text = Path(args.assembly).read_text(encoding="utf-8")
+            # Read once, validate before waiting for taps, save the same text beside the WAV.
+            assembly_text = read_text(args.assembly, "an assembly file", "TOML")
+            assembly_from_toml(assembly_text, args.assembly)
         settings = recording.TriggerSettings(sample_rate=args.sample_rate, n_taps=args.taps)
         device = recording.find_input_device(args.device)
     except DeviceError as err:

@@ -18,17 +18,10 @@ def write_json(data: dict, out: str | None) -> None:
     if out == "-":
         sys.stdout.write(text)
         return
-    import os
-    import tempfile
+    from taptune.library.store import atomic_write_bytes
 
-    path = Path(out)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        # A unique temporary name: two runs may write into the same folder at once.
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
+        atomic_write_bytes(out, text.encode("utf-8"))
     except OSError as err:
         raise InputError(f"{out}: cannot write ({err.strerror})") from None
 
@@ -67,13 +60,20 @@ class ProgressBar:
             self.stream.flush()
 
 
-def output_path(path: str | None, what: str) -> str | None:
-    """Check early that an output file's folder can be created (fail before long work)."""
+def output_path(path: str | None, what: str, protect=()) -> str | None:
+    """Make sure an output file can be written before any long work: not a folder, not one of
+    the ``protect`` files (e.g. the holder library), and its folder exists (created here)."""
     if path is None or path == "-":
         return path
-    parent = Path(path).expanduser().resolve().parent
-    if parent.exists() and not parent.is_dir():
-        raise InputError(f"{path}: cannot write the {what} ({parent} is not a folder)")
+    target = Path(path).expanduser().resolve()
+    if target.is_dir():
+        raise InputError(f"{path}: is a folder; give a file name for the {what}")
+    if any(target == Path(p).expanduser().resolve() for p in protect if p):
+        raise InputError(f"{path}: is the holder library; writing the {what} there would destroy it")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"{path}: cannot write the {what} ({target.parent}: {err.strerror})") from None
     return path
 
 

@@ -66,9 +66,9 @@ def analyse_file(path: str, assembly):
     from taptune.io.audio import read_audio
 
     recording = read_audio(path)
-    analysis = analyse_for_assembly(recording, assembly)
-    expected = model_expectation(assembly)[0] if assembly is not None else None
-    return recording, analysis, expected
+    guidance = model_expectation(assembly) if assembly is not None else None
+    analysis = analyse_for_assembly(recording, assembly, guidance=guidance)
+    return recording, analysis, None if guidance is None else guidance[0]
 
 
 def run_identification(analysis, assembly, options, progress=None):
@@ -356,7 +356,8 @@ class MainWindow(QMainWindow):
         self._set_progress(1.0, "done")
         self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model")
         self.predictor.set_source(PredictorSource(f"identified now ({assembly.holder.name})",
-                                                  tuple(result.param_sets), assembly, self.identify_options.model))
+                                                  tuple(result.param_sets), assembly, self.identify_options.model,
+                                                  result.relative_floor))
         self.show_view("fit")
         self.statusBar().showMessage(
             f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
@@ -405,7 +406,6 @@ class MainWindow(QMainWindow):
     def use_library_entry(self, entry) -> None:
         """Predict with a library holder and the tool and stick-out of the panel."""
         from taptune.errors import InputError
-        from taptune.model import ModelOptions
 
         assembly = self.assembly_panel.assembly
         if assembly is None:
@@ -413,14 +413,13 @@ class MainWindow(QMainWindow):
             return
         try:
             assembly = assembly.with_holder(entry.holder_geometry())
-            options = ModelOptions.from_dict(entry.model_options) if entry.model_options else None
+            options = entry.options()
         except (InputError, TypeError, ValueError) as err:
             show_error(self, "Cannot use this holder with this tool", str(err))
             return
-        sets = tuple(entry.param_sets) or (entry.params,)
-        if sets[0] != entry.params:
-            sets = (entry.params,) + sets
-        self.predictor.set_source(PredictorSource(f"library ({entry.name})", sets, assembly, options))
+        sets = tuple(entry.prediction_sets())
+        self.predictor.set_source(PredictorSource(f"library ({entry.name})", sets, assembly, options,
+                                                  entry.relative_floor()))
         self.show_view("predict")
 
     def _retarget_predictor(self, assembly) -> None:
@@ -435,7 +434,8 @@ class MainWindow(QMainWindow):
         except InputError as err:
             self.statusBar().showMessage(f"Prediction keeps the previous tool: {err}", 10000)
             return
-        self.predictor.set_source(PredictorSource(source.label, source.param_sets, moved, source.model_options))
+        self.predictor.set_source(PredictorSource(source.label, source.param_sets, moved, source.model_options,
+                                                  source.relative_floor))
 
     # ------------------------------------------------------------------ drag and drop, closing
 

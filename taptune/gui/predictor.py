@@ -34,6 +34,7 @@ class PredictorSource:
     param_sets: tuple
     assembly: object
     model_options: object = None
+    relative_floor: float = 5e-4  # see identify.predict
 
 
 def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ_HZ):
@@ -43,7 +44,7 @@ def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ
 
     options = source.model_options or ModelOptions()
     assembly = source.assembly.with_stickout(stickout_mm * MM)
-    prediction = predict(source.param_sets, assembly, options)
+    prediction = predict(source.param_sets, assembly, options, relative_floor=source.relative_floor)
     h = tip_receptance(build_model(assembly, options), source.param_sets[0], freq_hz)
     return stickout_mm, prediction, np.asarray(h)
 

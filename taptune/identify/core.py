@@ -58,8 +58,6 @@ class IdentifyOptions:
     # hardly move them and are left to the archive members.
     extreme_axes: tuple[int, ...] = (0, 1, 4, 5, 6)
     extreme_evaluations: int = 450
-    walks: int = 0  # optional random walks through the set (uncertainty.valley_walk)
-    walk_steps: int = 400
     near_count: int = 24  # how many diverse members the set keeps (best included)
 
 
@@ -81,6 +79,11 @@ class Identification:
     window_hz: tuple[np.ndarray, ...] = field(repr=False, compare=False)
     measured_shape: tuple[np.ndarray, ...] = field(repr=False, compare=False)
     model_shape: tuple[np.ndarray, ...] = field(repr=False, compare=False)
+
+    @property
+    def relative_floor(self) -> float:
+        """The smallest relative spread a prediction may claim: the fit's misfit (≥ 0.05 %)."""
+        return max(fit_misfit(m, f) for m, f in zip(self.bending_measured_hz, self.bending_model_hz))
 
     @property
     def param_spread(self) -> dict[str, float]:
@@ -222,8 +225,9 @@ def identify(
 
     say(0.97, "checking on the full model")
     measured, model_hz, model_zeta, window, meas_shape, mod_shape, terms = [], [], [], [], [], [], []
-    for target, asm in zip(targets, assemblies):
-        fe = build_model(asm, model_options)
+    for target, asm, evaluator in zip(targets, assemblies, evaluators):
+        # The evaluators hold the full model they were reduced from; build it only if not.
+        fe = getattr(evaluator, "fe", None) or build_model(asm, model_options)
         modes = solve_modes(fe, params, n_modes=3)
         h = tip_receptance(fe, params, target.window_hz)
         fm = np.asarray(modes.frequency_hz[:3], dtype=float)

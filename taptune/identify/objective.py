@@ -93,6 +93,9 @@ def make_target(
     magnitude = np.abs(np.asarray(magnitude, dtype=float))
     if not bending_hz:
         raise InputError(f"{label or 'recording'}: no bending peak was found, nothing to fit")
+    outside = sorted(m for m in bending_hz if m not in (1, 2, 3))
+    if outside:
+        raise InputError(f"{label or 'recording'}: bending mode number(s) {outside} outside 1–3 (only modes 1–3 are fitted)")
     if 1 not in bending_hz:
         raise InputError(
             f"{label or 'recording'}: the first bending mode was not found; the fit needs it "
@@ -176,13 +179,24 @@ class Objective:
             out.append(objective_terms(target, e.bending_hz, e.tip_receptance, self.options))
         return out
 
+    def _guarded_terms(self, p):
+        """:meth:`terms`, or None where the model evaluation fails (a candidate the solver
+        cannot handle is a very bad candidate, never a crash)."""
+        try:
+            terms = self.terms(p)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+            return None
+        return terms if np.all(np.isfinite(terms)) else None
+
+    def summed_terms(self, p) -> np.ndarray:
+        """(frequency term, shape term) summed over the recordings; both BAD on failure."""
+        terms = self._guarded_terms(p)
+        return np.array([self.BAD, self.BAD]) if terms is None else np.sum(terms, axis=0)
+
     def __call__(self, p) -> float:
         self.evaluations += 1
-        try:
-            value = sum(f + s for f, s in self.terms(p))
-        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
-            return self.BAD
-        return value if np.isfinite(value) else self.BAD
+        terms = self._guarded_terms(p)
+        return self.BAD if terms is None else sum(f + s for f, s in terms)
 
     def batch(self, P) -> np.ndarray:
         """J for every row of P."""

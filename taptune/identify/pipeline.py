@@ -39,7 +39,7 @@ def model_expectation(assembly, params: HolderParams | None = None, model_option
     params = params or NOMINAL
     fe = build_model(assembly, options)
     expected = np.asarray(analyse(assembly, params, options, fe=fe).bending_hz[:3], dtype=float)
-    bounds = np.asarray(bending_bounds(assembly, options), dtype=float)
+    bounds = np.asarray(bending_bounds(assembly, options, fe=fe), dtype=float)
     spread = np.zeros((expected.size, len(PARAMETER_SPREAD)))
     for k, (name, step) in enumerate(PARAMETER_SPREAD):
         value = getattr(params, name)
@@ -49,16 +49,19 @@ def model_expectation(assembly, params: HolderParams | None = None, model_option
     return expected, bounds, spread
 
 
-def analyse_for_assembly(recording, assembly=None, params: HolderParams | None = None, model_options=None, **kwargs):
+def analyse_for_assembly(recording, assembly=None, params: HolderParams | None = None, model_options=None,
+                         guidance=None, **kwargs):
     """Analyse a recording; with an assembly, the model guides the bending labels.
 
-    Extra keyword arguments go to :func:`taptune.signal.analysis.analyse_recording`.
+    ``guidance`` is a :func:`model_expectation` result the caller already has (computed
+    here otherwise). Extra keyword arguments go to
+    :func:`taptune.signal.analysis.analyse_recording`.
     """
     from taptune.signal.analysis import analyse_recording
 
     if assembly is None:
         return analyse_recording(recording, **kwargs)
-    expected, bounds, spread = model_expectation(assembly, params, model_options)
+    expected, bounds, spread = guidance or model_expectation(assembly, params, model_options)
     kwargs.setdefault("interface", assembly.holder.interface)
     return analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, spread_hz=spread, **kwargs)
 

@@ -5,7 +5,8 @@ Three phases run as tasks on a pool of forked worker processes (or in-process wi
 
 1. genetic-algorithm islands, each seeded from the master seed;
 2. BOBYQA polishes from each island's best and from diverse good archive points;
-3. random walks through the near-optimal set (:mod:`taptune.identify.uncertainty`).
+3. the near-optimal set's extent, each parameter pushed low and high inside it
+   (:mod:`taptune.identify.uncertainty`).
 
 The objective, with its evaluators, is set in :data:`STATE` before the workers fork, so it
 is built once and shared, never pickled.
@@ -21,7 +22,7 @@ import numpy as np
 
 from taptune.identify.objective import Objective
 from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish
-from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms, valley_walk
+from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms
 from taptune.model.params import NAMES, unit_to_p
 
 STATE: dict = {}
@@ -66,6 +67,13 @@ def select_diverse(u: np.ndarray, f: np.ndarray, count: int) -> np.ndarray:
     return order[np.array(chosen)]
 
 
+def _cancelled(start: np.ndarray) -> RunResult | None:
+    """The result of a task that was asked to stop before it began, or None."""
+    if STATE["cancel"].is_set():
+        return RunResult(start, Objective.BAD, 0, np.empty((0, len(start))), np.empty(0), True)
+    return None
+
+
 def _limits():
     from threadpoolctl import threadpool_limits
 
@@ -105,8 +113,8 @@ def polish_task(u0: np.ndarray) -> RunResult:
     """BOBYQA from one start; returns the polished point and its near-optimal trail."""
     objective: Objective = STATE["objective"]
     options = STATE["options"]
-    if STATE["cancel"].is_set():
-        return RunResult(u0, Objective.BAD, 0, np.empty((0, len(u0))), np.empty(0), True)
+    if (stopped := _cancelled(u0)) is not None:
+        return stopped
     archive = Archive()
     start = objective.evaluations
     with _limits():
@@ -116,31 +124,13 @@ def polish_task(u0: np.ndarray) -> RunResult:
     return RunResult(u, value, objective.evaluations - start, au[keep], af[keep])
 
 
-def walk_task(args) -> RunResult:
-    """A random walk through the near-optimal set from one member."""
-    index, start, scale, limits = args
-    objective: Objective = STATE["objective"]
-    options = STATE["options"]
-    if STATE["cancel"].is_set():
-        return RunResult(start, Objective.BAD, 0, np.empty((0, len(start))), np.empty(0), True)
-    seed = np.random.SeedSequence([options.seed, 7, index])
-    before = objective.evaluations
-    with _limits():
-        samples, _ = valley_walk(
-            lambda u: summed_terms(objective, unit_to_p, u), start, limits, scale,
-            np.random.default_rng(seed), steps=options.walk_steps,
-        )
-    # Walk samples carry no J of their own: rank them as equals after the best.
-    return RunResult(start, Objective.BAD, objective.evaluations - before, samples, np.full(len(samples), np.inf))
-
-
 def extreme_task(args) -> RunResult:
     """The smallest or largest value of one parameter inside the near-optimal set."""
     axis, sign, start, limits = args
     objective: Objective = STATE["objective"]
     options = STATE["options"]
-    if STATE["cancel"].is_set():
-        return RunResult(start, Objective.BAD, 0, np.empty((0, len(start))), np.empty(0), True)
+    if (stopped := _cancelled(start)) is not None:
+        return stopped
     with _limits():
         found, evaluations = set_extreme(lambda u: summed_terms(objective, unit_to_p, u), start, axis, sign,
                                          limits, options.extreme_evaluations)
@@ -150,12 +140,17 @@ def extreme_task(args) -> RunResult:
     return RunResult(ends[-1], Objective.BAD, evaluations, keep, np.full(len(keep), np.inf))
 
 
+def _pooled(results: list[RunResult], bests: list[RunResult]):
+    """All archive points of ``results`` followed by the points of ``bests``: (u, J, J_min)."""
+    au = np.vstack([r.archive_u for r in results] + [r.u[None, :] for r in bests])
+    af = np.concatenate([r.archive_f for r in results] + [[r.value] for r in bests])
+    return au, af, float(af.min())
+
+
 def polish_starts(results: list[RunResult], options, modes: int) -> np.ndarray:
     """Each island's best, then diverse good points of the archives (different places on the
     valley of equally good fits, MODEL.md §8.6), up to ``options.polish_starts``."""
-    au = np.vstack([r.archive_u for r in results] + [r.u[None, :] for r in results])
-    af = np.concatenate([r.archive_f for r in results] + [[r.value] for r in results])
-    j_min = float(af.min())
+    au, af, j_min = _pooled(results, results)
     good = af <= j_min + options.polish_band + near_band(j_min, options, modes)
     starts = [r.u for r in sorted(results, key=lambda r: r.value)]
     for i in select_diverse(au[good], af[good], options.polish_starts):
@@ -252,11 +247,9 @@ class Workers:
 
 def near_optimal_set(objective: Objective, workers: Workers, results: list[RunResult], best: RunResult, options):
     """The best fit first, then up to ``near_count − 1`` diverse members of the near-optimal set,
-    from the archives and from random walks through the set. Returns (unit points, evaluations)."""
+    from the archives and from its extremes. Returns (unit points, evaluations)."""
     modes = n_modes(objective)
-    au = np.vstack([r.archive_u for r in results] + [best.u[None, :]])
-    af = np.concatenate([r.archive_f for r in results] + [[best.value]])
-    j_min = float(min(af.min(), best.value))
+    au, af, j_min = _pooled(results, [best])
     pool = af <= j_min + near_band(j_min, options, modes)
     pick = select_diverse(au[pool], af[pool], options.near_candidates)
     cand_u, cand_f = au[pool][pick], af[pool][pick]
@@ -273,17 +266,5 @@ def near_optimal_set(objective: Objective, workers: Workers, results: list[RunRe
         found = np.vstack([e.archive_u for e in ends])
         members = np.vstack([members, found])
         values = np.concatenate([values, np.full(len(found), np.inf)])
-    if options.walks and options.walk_steps:
-        from taptune.identify.uncertainty import proposal_scale
-
-        scale = proposal_scale(members)
-        far = select_diverse(members, values, options.walks)
-        starts = [members[i] for i in far] + [best.u] * (options.walks - len(far))
-        walks = workers.map(walk_task, [(i, s, scale, limits) for i, s in enumerate(starts)],
-                            phase=(0.9, 0.0, "sampling the uncertainty"))
-        evaluations += sum(w.evaluations for w in walks)
-        walked = np.vstack([w.archive_u for w in walks])
-        members = np.vstack([members, walked])
-        values = np.concatenate([values, np.full(len(walked), np.inf)])
     keep = select_diverse(members, values, options.near_count)  # the best first (value −inf)
     return members[keep], evaluations

@@ -8,9 +8,9 @@ multiple of the best's, because it is dominated by the systematic difference bet
 the sound and the tool-tip receptance. The valley can run to the edge of the search space
 (a contact so stiff that the frequencies no longer feel it), far beyond what an optimiser's
 archive visits, so its extent is measured directly: for every parameter, the smallest and
-the largest value inside the set (:func:`set_extreme`, a constrained COBYLA run). An
-adaptive random walk through the set (:func:`valley_walk`) is the alternative for a
-denser sample. Predictions over these members give honest uncertainty bands.
+the largest value inside the set (:func:`set_extreme`, a constrained COBYLA run); an
+adaptive random walk was tried and travelled too slowly along the valley.
+Predictions over these members give honest uncertainty bands.
 """
 
 from __future__ import annotations
@@ -32,59 +32,9 @@ class SetLimits:
 
 
 def summed_terms(objective, u_to_p, u) -> np.ndarray:
-    """(frequency term, shape term) summed over the objective's recordings at unit point u."""
-    return np.sum(objective.terms(u_to_p(u)), axis=0)
-
-
-def proposal_scale(members: np.ndarray, floor: float = 1e-3) -> np.ndarray:
-    """Cholesky factor of the proposal covariance: the members' covariance × 2.38²/d (Haario et al.)."""
-    d = members.shape[1]
-    cov = np.cov(members.T) if len(members) > d else np.zeros((d, d))
-    cov = cov * 2.38**2 / d + np.eye(d) * floor**2
-    return np.linalg.cholesky(cov)
-
-
-def valley_walk(terms_at, start: np.ndarray, limits: SetLimits, scale: np.ndarray, rng: np.random.Generator,
-                steps: int = 400, adapt_every: int = 100):
-    """Random walk uniform over {u in [0,1]^d : terms_at(u) within limits}.
-
-    Parameters
-    ----------
-    terms_at : callable
-        u → (frequency term, shape term).
-    start : ndarray, shape (d,)
-        A member of the set.
-    scale : ndarray, shape (d, d)
-        Cholesky factor of the initial proposal covariance; re-estimated from the walk's
-        own samples every ``adapt_every`` steps, and shrunk or grown to keep about a
-        quarter of the proposals inside.
-
-    Returns
-    -------
-    samples : ndarray, shape (k, d)
-        Distinct accepted states (the start included).
-    evaluations : int
-    """
-    d = len(start)
-    u = np.asarray(start, dtype=float).copy()
-    samples = [u.copy()]
-    factor, accepted, tried, evaluations = 1.0, 0, 0, 0
-    for step in range(1, steps + 1):
-        proposal = u + factor * (scale @ rng.standard_normal(d))
-        tried += 1
-        inside = bool(np.all(proposal >= 0.0) and np.all(proposal <= 1.0))
-        evaluations += inside
-        if inside and limits.contains(terms_at(proposal)):
-            u = proposal
-            samples.append(u.copy())
-            accepted += 1
-        if step % adapt_every == 0:
-            rate = accepted / tried
-            factor *= 1.5 if rate > 0.35 else (0.6 if rate < 0.15 else 1.0)
-            if len(samples) > 2 * d:
-                scale = proposal_scale(np.array(samples))
-            accepted = tried = 0
-    return np.array(samples), evaluations
+    """(frequency term, shape term) summed over the objective's recordings at unit point u
+    (:meth:`Objective.summed_terms`: a failed model evaluation lies outside every set)."""
+    return objective.summed_terms(u_to_p(u))
 
 
 def set_extreme(terms_at, start: np.ndarray, quantity, sign: float, limits: SetLimits,

@@ -187,8 +187,10 @@ def validate(asm: Assembly) -> Assembly:
             fail(f"{key}.density", f"must be > 0 kg/m³, got {m.density:g}")
         if not (m.youngs_modulus > 0 and math.isfinite(m.youngs_modulus)):
             fail(f"{key}.youngs_modulus", f"must be > 0 GPa, got {m.youngs_modulus / GPA:g}")
-        if not (-1.0 < m.poisson < 0.5):
-            fail(f"{key}.poisson", f"must lie in (-1, 0.5), got {m.poisson:g}")
+        # Holder steels and carbide lie near 0.2-0.3; negative ratios (auxetic foams) are no
+        # tool material, and near -1 they break the shear coefficient of MODEL.md §3.2.
+        if not (0.0 <= m.poisson < 0.5):
+            fail(f"{key}.poisson", f"must lie in [0, 0.5), got {m.poisson:g}")
         if not (0 <= m.loss_factor < 1):
             fail(f"{key}.loss_factor", f"must lie in [0, 1), got {m.loss_factor:g}")
     seg_sum = sum(s.length for s in t.segments)
@@ -357,15 +359,18 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
     return validate(Assembly(holder=holder, tool=tool, stickout=stickout, source=source))
 
 
-def load_assembly(path: str | Path) -> Assembly:
-    """Read and validate an assembly TOML file (ASSEMBLY-FORMAT.md)."""
-    name = str(path)
-    text = read_text(path, "an assembly file", "TOML")
+def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
+    """Parse and validate the TOML text of an assembly file; errors name ``source``."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise InputError(f"{name}: not valid TOML ({err})") from None
-    return parse_assembly(data, name)
+        raise InputError(f"{source}: not valid TOML ({err})") from None
+    return parse_assembly(data, source)
+
+
+def load_assembly(path: str | Path) -> Assembly:
+    """Read and validate an assembly TOML file (ASSEMBLY-FORMAT.md)."""
+    return assembly_from_toml(read_text(path, "an assembly file", "TOML"), str(path))
 
 
 # --------------------------------------------------------------------------- writing

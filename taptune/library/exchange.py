@@ -74,8 +74,10 @@ def export_library(lib: HolderLibrary, out: str | os.PathLike, format: str = "js
     """
     if format not in FORMATS:
         raise InputError(f"export format must be one of {', '.join(FORMATS)}, got {format!r}")
-    entries = lib.entries()
     out = Path(out)
+    if Path(os.path.realpath(out)) == lib.target:
+        raise InputError(f"{out}: is the library being exported; choose another file")
+    entries = lib.entries()
     if format == "json":
         data = encode(entries, str(out))
     else:
@@ -230,10 +232,7 @@ def identified_setups(entry: HolderEntry) -> list[tuple[dict, float]]:
 
 def predict_setup(entry: HolderEntry, tool: dict, stickout_mm: float):
     """Bending modes with spread of the holder with ``tool`` at ``stickout_mm`` (an identify Prediction)."""
-    from taptune.identify import predict
-
-    sets = [entry.params] + [p for p in entry.param_sets if p != entry.params]
-    return predict(sets, entry.assembly(tool, stickout_mm), entry.options())
+    return entry.predict(entry.assembly(tool, stickout_mm))
 
 
 # --------------------------------------------------------------------------- receptance files

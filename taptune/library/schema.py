@@ -562,9 +562,27 @@ class HolderEntry:
         from taptune.model.options import ModelOptions
 
         try:
-            return ModelOptions.from_dict(self.model_options)
-        except (TypeError, ValueError) as err:
-            raise LibraryFormatError(f"holder {self.name!r}: model_options are not usable ({err})") from None
+            return ModelOptions.from_dict(self.model_options, f"holder {self.name!r}: model_options")
+        except InputError as err:
+            raise LibraryFormatError(f"{err} (the predictions must use the identification's options)") from None
+
+    def prediction_sets(self) -> list[HolderParams]:
+        """The best parameters first, then the other near-optimal sets (no repeats)."""
+        return [self.params] + [p for p in self.param_sets if p != self.params]
+
+    def relative_floor(self) -> float:
+        """The smallest relative spread a prediction may claim: the worst misfit of any
+        identification of this holder (at least the 0.05 % the peaks are measured to)."""
+        from taptune.identify.core import fit_misfit
+
+        return max([fit_misfit(r.bending_measured_hz, r.bending_model_hz) for r in self.identifications] or [5e-4])
+
+    def predict(self, assembly):
+        """Bending modes with spread of this holder in ``assembly`` (an identify Prediction):
+        the one way the CLI, the library commands and the GUI predict from the library."""
+        from taptune.identify import predict
+
+        return predict(self.prediction_sets(), assembly, self.options(), relative_floor=self.relative_floor())
 
     def spread(self) -> dict[str, float]:
         """± half-width of each parameter over the best and the near-optimal sets (library units)."""

@@ -85,7 +85,22 @@ class ModelOptions:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict) -> "ModelOptions":
-        """Inverse of :meth:`to_dict`; unknown keys are ignored (newer versions may add some)."""
+    def from_dict(cls, data: dict, source: str = "model options") -> "ModelOptions":
+        """Inverse of :meth:`to_dict`; unknown keys are ignored (newer versions may add some).
+
+        The data come from files (the holder library), so a bad value is an InputError
+        naming ``source``, not a traceback.
+        """
+        from taptune.errors import InputError
+
+        if not isinstance(data, dict):
+            raise InputError(f"{source}: must be a table of model options, got {type(data).__name__}")
         known = {k: data[k] for k in cls.__dataclass_fields__ if k in data}
-        return cls(**known)
+        for key, value in known.items():
+            want = (int, float) if isinstance(getattr(cls(), key), float) else str
+            if isinstance(value, bool) or not isinstance(value, want):
+                raise InputError(f"{source}: {key} must be a {'number' if want != str else 'string'}, got {value!r}")
+        try:
+            return cls(**known)
+        except (TypeError, ValueError) as err:
+            raise InputError(f"{source}: {err}") from None

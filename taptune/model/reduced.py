@@ -42,12 +42,12 @@ from scipy.linalg.lapack import zgeqrf, zgetrf, zgetrs, zungqr
 
 from taptune.io.assembly import Assembly
 from taptune.model.fe import FEModel, build_model
+from taptune.model.modes import SIGMA
 from taptune.model.options import ModelOptions
 from taptune.model.params import ETA_REFERENCE_MM, P_LOWER, P_UPPER
 
-# Shift of the inverse iteration [rad²/s²]: below the rigid-body pair, so K̃ − σM is
-# regular although the model is free-free (the same shift as the full model's solver).
-SIGMA = -((2 * np.pi * 200.0) ** 2)
+# The inverse iteration shifts by the full model's SIGMA (below the rigid-body pair, so
+# K̃ − σM is regular although the model is free-free).
 TWO_PI = 2 * np.pi
 # Affine pieces in the order of the coefficient vector of stiffness_coefficients.
 _K_PIECES = ("K_tool", "K_holder", "T0", "T1", "R0", "R1")
@@ -469,7 +469,6 @@ class FastEvaluator:
         snapshots = _train(component, train_u, train_p, reduction)
         Q, rigid = _pod_basis(component, snapshots, len(fe.z_holder) * 2, V, reduction.pod_tolerance)
         self.model = component.compress(Q, rigid)
-        self.basis = V @ Q
         self.component_size = component.n
         self._solver = _Solver(self.model, reduction)
         # Start blocks in the compressed coordinates (Q is orthonormal). The nearest

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 
-from taptune.errors import InputError
 
 KIND_COLOURS = {"bending": "#c0392b", "local": "#7f8c8d", "other": "#2980b9"}
 
@@ -25,11 +24,10 @@ def _pyplot():
 
 
 def _save(fig, path) -> None:
+    from taptune.report.figures import save_png
+
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=110)
-    except OSError as err:
-        raise InputError(f"{path}: cannot write the picture ({err.strerror})") from None
+        save_png(fig, path, dpi=110)
     finally:
         _pyplot().close(fig)
 
@@ -120,9 +118,7 @@ def plot_predictions(entry, assemblies, predictions, path) -> None:
     """Write a PNG of the predicted tip receptances, one curve per stick-out."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
-    from taptune.model import ModelOptions
-
-    options = ModelOptions.from_dict(entry.model_options)
+    options = entry.options()
     draw_predictions(ax, prediction_curves(entry.params, assemblies, options), predictions)
     ax.set_title(f"{entry.name}\n{assemblies[0].tool.name}", fontsize=9)
     _save(fig, path)

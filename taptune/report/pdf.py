@@ -13,7 +13,6 @@ imported only when drawing.
 
 from __future__ import annotations
 
-import contextlib
 import textwrap
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -86,14 +85,14 @@ def report_stickouts_mm(stickout_mm: float) -> list[float]:
     return [round(stickout_mm + d, 6) for d in STICKOUT_OFFSETS_MM]
 
 
-def predict_rows(param_sets, assembly, model_options=None) -> tuple[PredictionRow, ...]:
+def predict_rows(param_sets, assembly, model_options=None, relative_floor: float = 5e-4) -> tuple[PredictionRow, ...]:
     """Predictions at :func:`report_stickouts_mm`; an impossible stick-out gets a note, not an error."""
     from taptune.identify import predict
 
     rows = []
     for s in report_stickouts_mm(assembly.stickout * 1e3):
         try:
-            p = predict(param_sets, assembly.with_stickout(s * 1e-3), model_options)
+            p = predict(param_sets, assembly.with_stickout(s * 1e-3), model_options, relative_floor=relative_floor)
         except InputError:
             rows.append(PredictionRow(s, note="geometry not possible"))
             continue
@@ -128,7 +127,7 @@ def report_pages(result, analyses, recordings, assemblies, model_options=None) -
             date=date,
             result=recording_view(result, k),
             analysis=analysis,
-            predictions=predict_rows(result.param_sets, asm, model_options),
+            predictions=predict_rows(result.param_sets, asm, model_options, result.relative_floor),
             joint_files=files if joint else (),
             joint_objective=result.objective if joint else None,
         ))
@@ -256,11 +255,9 @@ def write_report(path, pages: Sequence[ReportPage], summary_rows: Sequence = (),
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
 
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    written = False
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+    from taptune.library.store import atomic_write
+
+    def write(tmp) -> None:
         with PdfPages(tmp, metadata={"Title": title, "Creator": "taptune"}) as pdf:
             n_summary = -(-len(summary_rows) // SUMMARY_ROWS_PER_PAGE)
             for k in range(n_summary):
@@ -273,14 +270,11 @@ def write_report(path, pages: Sequence[ReportPage], summary_rows: Sequence = (),
                 draw_page(fig, page)
                 pdf.savefig(fig)
                 plt.close(fig)
-        tmp.replace(path)  # a reader never sees half a report
-        written = True
+
+    try:
+        atomic_write(path, write)  # a reader never sees half a report
     except OSError as err:
         raise InputError(f"{path}: cannot write the report ({err.strerror})") from None
-    finally:
-        if not written:
-            with contextlib.suppress(OSError):
-                tmp.unlink(missing_ok=True)
 
 
 def write_identification_report(path, result, analyses, recordings, assemblies, model_options=None) -> None:

@@ -6,6 +6,8 @@ costs nothing and works without a display.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 #: Colours per peak kind (colour-blind safe, after Okabe & Ito).
@@ -88,10 +90,12 @@ def plot_spectrum(analysis, path, expected_hz=None, title: str | None = None, dp
     ax.set_ylabel("magnitude [dB re maximum]")
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(loc="lower left", fontsize=8, ncol=3, framealpha=0.9)
-    name = a.file.rsplit("/", 1)[-1] if a.file else "recording"
+    name = Path(a.file).name if a.file else "recording"
     ax.set_title(title or f"{name}: {a.n_taps} of {len(a.taps)} taps, {a.sample_rate} Hz", fontsize=10)
     if a.warnings:
         fig.text(0.01, 0.005, "\n".join("! " + w for w in a.warnings[:4]), fontsize=7, color="#B8860B",
                  va="bottom", ha="left")
         fig.subplots_adjust(bottom=0.1 + 0.03 * min(len(a.warnings), 4))
-    fig.savefig(str(path), format="png")
+    from taptune.report.figures import save_png
+
+    save_png(fig, path)

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from taptune.errors import InputError
+from taptune.io.files import read_text
 from taptune.signal.peaks import Peak
 
 #: Local-mode bands of one interface: ((lo_hz, hi_hz), ...).
@@ -66,10 +67,7 @@ def load_band_table(path) -> dict[str, Bands]:
         Unreadable file or malformed entries (names the file and the entry).
     """
     p = Path(path)
-    try:
-        text = p.read_text()
-    except OSError as err:
-        raise InputError(f"{path}: cannot read interface band table ({err.strerror or err})") from None
+    text = read_text(p, "an interface band table", "TOML or JSON")
     try:
         data = json.loads(text) if p.suffix.lower() == ".json" else tomllib.loads(text)
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as err:

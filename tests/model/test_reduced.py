@@ -158,3 +158,17 @@ def test_low_frequency_receptance_is_the_rigid_body_mass_line(reference):
     h_full = tip_receptance(fe, NOMINAL, [5.0, 50.0], method="direct")
     h = ev.evaluate(to_p(NOMINAL), [5.0, 50.0]).tip_receptance
     np.testing.assert_allclose(h, h_full, rtol=1e-6)
+
+
+def test_the_fast_contact_coefficients_equal_the_parameters_own():
+    """stiffness_coefficients repeats HolderParams.c_t/c_r in plain Python for speed; they must agree."""
+    from taptune.model.params import P_LOWER, P_UPPER, from_p
+    from taptune.model.reduced import stiffness_coefficients
+
+    for u in np.random.default_rng(0).random((20, 7)):
+        p = P_LOWER + u * (P_UPPER - P_LOWER)
+        params = from_p(p)
+        c = stiffness_coefficients(p)
+        a = params.alpha / 100
+        expected = [1.0, params.modulus_factor, params.c_t, params.c_t * a, params.c_r, params.c_r * a]
+        np.testing.assert_allclose(c, expected, rtol=1e-12)
