@@ -71,6 +71,12 @@ class HolderParams:
                 raise InputError(f"{source}: parameter {k} must be >= 0, got {values[k]:g}")
         if abs(values["alpha"]) >= 100:
             raise InputError(f"{source}: parameter alpha must lie in (-100, 100) %, got {values['alpha']:g}")
+        # Two decades beyond the search space (MODEL.md §8.1) is still a holder; far beyond
+        # it the matrices overflow or lose all precision.
+        for k, lo, hi in (("k_tt", 1e2, 1e12), ("k_rr", 1.0, 1e7), ("eta_tt", 0.0, 1.0), ("eta_rr", 0.0, 1.0),
+                          ("density_factor", 0.1, 10.0), ("modulus_factor", 0.1, 10.0)):
+            if not lo <= values[k] <= hi:
+                raise InputError(f"{source}: parameter {k} = {values[k]:g} is not plausible (expected {lo:g} … {hi:g})")
         return cls(**values)
 
 

@@ -126,3 +126,10 @@ def test_a_failed_model_evaluation_is_a_bad_candidate_not_a_crash():
     assert objective(np.zeros(7)) == Objective.BAD
     # The near-optimal set's limits use the same guard: a failure lies outside the set.
     assert np.all(objective.summed_terms(np.zeros(7)) == Objective.BAD)
+
+
+@pytest.mark.parametrize("key, value", [("k_tt", 1e300), ("density_factor", 1e-300), ("eta_rr", 5.0)])
+def test_absurd_parameters_are_a_clear_error(tmp_path, reference_toml, capsys, key, value):
+    params = tmp_path / "p.json"
+    params.write_text(json.dumps({**NOMINAL.to_dict(), key: value}))
+    one_line_exit_2(capsys, main(["model", str(reference_toml), "--params", str(params)]), key, "not plausible")

@@ -195,16 +195,20 @@ def test_encoding_refuses_a_non_entry():
 
 # --------------------------------------------------------------------------- property
 
-positive = st.floats(min_value=1e-300, max_value=1e300, allow_nan=False, allow_infinity=False)
+def plausible(lo, hi):
+    """Any float inside HolderParams.from_dict's plausibility limits."""
+    return st.floats(min_value=lo, max_value=hi, allow_nan=False, allow_infinity=False)
+
+
 params_strategy = st.builds(
     HolderParams,
-    k_tt=positive,
-    k_rr=positive,
-    eta_tt=st.floats(min_value=0, max_value=1e3),
-    eta_rr=st.floats(min_value=0, max_value=1e3),
+    k_tt=plausible(1e2, 1e12),
+    k_rr=plausible(1.0, 1e7),
+    eta_tt=plausible(0.0, 1.0),
+    eta_rr=plausible(0.0, 1.0),
     alpha=st.floats(min_value=-99.999, max_value=99.999),
-    density_factor=positive,
-    modulus_factor=positive,
+    density_factor=plausible(0.1, 10.0),
+    modulus_factor=plausible(0.1, 10.0),
 )
 names = st.text(st.characters(min_codepoint=32, blacklist_categories=("Cs",)), min_size=1, max_size=40).filter(str.strip)
 
