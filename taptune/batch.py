@@ -682,7 +682,7 @@ def run_jobs(jobs, options: BatchOptions, on_outcome: Callable[[Outcome], None],
 
 def write_summary(path: Path, rows: Sequence[Row]) -> None:
     """Write ``summary.csv`` (header :data:`SUMMARY_HEADER`) atomically."""
-    from taptune.library.store import atomic_write_bytes
+    from taptune.io.atomic import atomic_write_bytes
 
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from taptune.errors import InputError
+from taptune.io.atomic import atomic_write_bytes
 
 
 def write_json(data: dict, out: str | None) -> None:
@@ -18,8 +19,6 @@ def write_json(data: dict, out: str | None) -> None:
     if out == "-":
         sys.stdout.write(text)
         return
-    from taptune.library.store import atomic_write_bytes
-
     try:
         atomic_write_bytes(out, text.encode("utf-8"))
     except OSError as err:

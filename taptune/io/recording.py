@@ -19,7 +19,6 @@ sounddevice stream in tests (and anywhere without a sound card).
 
 from __future__ import annotations
 
-import os
 import queue
 import threading
 import time
@@ -31,6 +30,7 @@ from typing import Callable
 import numpy as np
 
 from taptune.errors import DeviceError, InputError
+from taptune.io.atomic import atomic_write
 
 # Levels are reported in dB relative to full scale; silence is shown as this floor.
 FLOOR_DBFS = -120.0
@@ -625,15 +625,14 @@ class Recorder:
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 def _atomic_write_wav(path: Path, samples: np.ndarray, sample_rate: int) -> None:
     """Write a 24-bit WAV through a temporary file so a crash never leaves half a file."""
     import soundfile
 
-    tmp = path.with_name(f".{path.stem}.part.wav")
-    soundfile.write(str(tmp), np.clip(samples, -1.0, 1.0), int(sample_rate), subtype="PCM_24", format="WAV")
-    os.replace(tmp, path)
+    def write(tmp: Path) -> None:
+        soundfile.write(str(tmp), np.clip(samples, -1.0, 1.0), int(sample_rate), subtype="PCM_24", format="WAV")
+
+    atomic_write(path, write)

@@ -3,7 +3,7 @@
 ``HolderLibrary(path)`` reads, validates and changes the file; ``HolderEntry`` is one
 holder (geometry, best parameters, near-optimal sets, model options, provenance);
 ``default_library_path()`` resolves ``--library``, ``TAPTUNE_LIBRARY`` and the user data
-folder. Import/export and receptance files live in :mod:`taptune.library.exchange`
+folder. Atomic file writing is :mod:`taptune.io.atomic`. Import/export and receptance files live in :mod:`taptune.library.exchange`
 (imported on use, so pyuff is only needed there).
 """
 
@@ -19,7 +19,7 @@ from taptune.library.schema import (
     tool_to_dict,
     utc_now,
 )
-from taptune.library.store import HolderLibrary, atomic_write, atomic_write_bytes, default_library_path
+from taptune.library.store import HolderLibrary, default_library_path
 
 __all__ = [
     "SCHEMA",
@@ -29,8 +29,6 @@ __all__ = [
     "LibraryFormatError",
     "ProvenanceRecord",
     "UnknownHolderError",
-    "atomic_write",
-    "atomic_write_bytes",
     "default_library_path",
     "sha256_file",
     "tool_from_dict",

@@ -9,7 +9,7 @@
   another tool or stick-out (MODEL.md §9); :func:`write_receptance_csv` and
   :func:`write_receptance_uff58` write it for other software (pyuff imported lazily).
 
-Every file is written atomically (:func:`taptune.library.store.atomic_write`).
+Every file is written atomically (:func:`taptune.io.atomic.atomic_write`).
 """
 
 from __future__ import annotations
@@ -23,8 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from taptune.errors import InputError, LibraryError
+from taptune.io.atomic import atomic_write, atomic_write_bytes
 from taptune.library.schema import PARAM_UNITS, HolderEntry, encode
-from taptune.library.store import HolderLibrary, atomic_write, atomic_write_bytes, read_library_file
+from taptune.library.store import HolderLibrary, read_library_file
 from taptune.model.params import NAMES
 
 FORMATS = ("json", "csv")

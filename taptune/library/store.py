@@ -1,8 +1,8 @@
 """The holder library on disk: one JSON file, atomic writes, a lock around every change.
 
-Readers never lock: every write replaces the file atomically (temporary file in the same
-folder, fsync, :func:`os.replace`, fsync of the folder), so a reader sees the old or the
-new library, never half of one, and a crash mid-write leaves the old file intact.
+Readers never lock: every write replaces the file atomically (:mod:`taptune.io.atomic`:
+temporary file in the same folder, fsync, :func:`os.replace`, fsync of the folder), so a
+reader sees the old or the new library, never half of one, and a crash mid-write leaves the old file intact.
 Writers take an exclusive lock on a sidecar ``<library>.lock`` file and re-read the
 library under it, so two processes adding holders at the same time keep both. A library
 file that does not validate is reported and never overwritten.
@@ -12,17 +12,15 @@ from __future__ import annotations
 
 import difflib
 import errno
-import glob
 import os
-import secrets
-import stat
 import sys
 import time
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Iterator
 
 from taptune.errors import LibraryError
+from taptune.io.atomic import atomic_write_bytes, remove_stale_temporaries
 from taptune.library.schema import (
     HolderEntry,
     LibraryFormatError,
@@ -64,70 +62,6 @@ def _user_data_dir() -> Path:
     xdg = os.environ.get("XDG_DATA_HOME", "")
     # The XDG spec says a relative value is invalid and must be ignored.
     return Path(xdg) if xdg and os.path.isabs(xdg) else home / ".local" / "share"
-
-
-# --------------------------------------------------------------------------- atomic files
-
-
-def _fsync_dir(folder: Path) -> None:
-    """Make a rename in ``folder`` durable (POSIX); Windows has no directory handles to sync."""
-    if sys.platform == "win32":
-        return
-    fd = os.open(folder, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None:
-    """Create or replace ``path`` atomically with what ``write(tmp_path)`` puts into an empty file.
-
-    The temporary file sits in the same folder (so the rename cannot cross file systems),
-    is fsynced before :func:`os.replace`, and the folder is fsynced after it. If anything
-    fails, the temporary file is removed and ``path`` is untouched. Parent folders are
-    created. The new file keeps the old one's permissions.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f"{_tmp_prefix(path)}{os.getpid()}.{secrets.token_hex(4)}.tmp")
-    # os.open applies the umask to 0o666, as a plain open() of a new file would.
-    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
-    try:
-        write(tmp)
-        fd = os.open(tmp, os.O_RDWR)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        if path.exists():
-            os.chmod(tmp, stat.S_IMODE(path.stat().st_mode))
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    _fsync_dir(path.parent)
-
-
-def _tmp_prefix(path: Path) -> str:
-    return f".{path.name}."
-
-
-def _remove_stale_temporaries(path: Path) -> None:
-    """Delete temporary files a killed writer of ``path`` left behind (call under the lock)."""
-    for stale in path.parent.glob(f"{glob.escape(_tmp_prefix(path))}*.tmp"):
-        stale.unlink(missing_ok=True)
-
-
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Create or replace ``path`` atomically with ``data`` (see :func:`atomic_write`)."""
-
-    def write(tmp: Path) -> None:
-        with open(tmp, "wb") as f:
-            f.write(data)
-            f.flush()
-
-    atomic_write(path, write)
 
 
 # --------------------------------------------------------------------------- lock
@@ -313,7 +247,7 @@ class HolderLibrary:
                 try:
                     # Only library writers make these files, and they hold the lock while
                     # they exist: any found now belong to a writer that was killed.
-                    _remove_stale_temporaries(self.target)
+                    remove_stale_temporaries(self.target)
                     atomic_write_bytes(self.target, raw)
                 except OSError as err:
                     raise LibraryError(

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Sequence
 
 from taptune.errors import InputError
+from taptune.io.atomic import atomic_write
 
 PAGE_SIZE_IN = (11.69, 8.27)  # A4 landscape
 STICKOUT_OFFSETS_MM = (-20.0, -10.0, 0.0, 10.0, 20.0)
@@ -254,8 +255,6 @@ def write_report(path, pages: Sequence[ReportPage], summary_rows: Sequence = (),
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
-
-    from taptune.library.store import atomic_write
 
     def write(tmp) -> None:
         with PdfPages(tmp, metadata={"Title": title, "Creator": "taptune"}) as pdf:

@@ -1,0 +1,82 @@
+"""Files that are either wholly old or wholly new: write beside, fsync, rename, fsync the folder.
+
+Every file taptune writes for the user (holder library, JSON results, CSV and PDF
+reports, recordings) goes through :func:`atomic_write`, so a reader never sees half a
+file and a crash mid-write leaves the previous file intact.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import secrets
+import stat
+import sys
+from pathlib import Path
+from typing import Callable
+
+
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (POSIX); Windows has no directory handles to sync."""
+    if sys.platform == "win32":
+        return
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None:
+    """Create or replace ``path`` atomically with what ``write(tmp_path)`` puts into an empty file.
+
+    The temporary file sits in the same folder (so the rename cannot cross file systems),
+    is fsynced before :func:`os.replace`, and the folder is fsynced after it. If anything
+    fails, the temporary file is removed and ``path`` is untouched. Parent folders are
+    created. The new file keeps the old one's permissions.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f"{_tmp_prefix(path)}{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    # os.open applies the umask to 0o666, as a plain open() of a new file would.
+    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    try:
+        write(tmp)
+        fd = os.open(tmp, os.O_RDWR)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        if path.exists():
+            os.chmod(tmp, stat.S_IMODE(path.stat().st_mode))
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    _fsync_dir(path.parent)
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Create or replace ``path`` atomically with ``data`` (see :func:`atomic_write`)."""
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+
+    atomic_write(path, write)
+
+
+def _tmp_prefix(path: Path) -> str:
+    return f".{path.name}."
+
+
+def remove_stale_temporaries(path: str | os.PathLike) -> None:
+    """Delete temporary files a killed writer of ``path`` left behind.
+
+    Only safe while holding a lock that every writer of ``path`` takes (the holder
+    library's); otherwise a live writer's temporary file could be removed.
+    """
+    path = Path(path)
+    for stale in path.parent.glob(f"{glob.escape(_tmp_prefix(path))}*.tmp"):
+        stale.unlink(missing_ok=True)
