@@ -1,5 +1,7 @@
-"""Holder-library import and export, and receptance files of a holder with a tool.
+"""Holder-library files in and out, and receptance files of a holder with a tool.
 
+* :func:`read_library_file` reads and validates a file in the library format (the
+  library's own file, an exported one, one to import).
 * :func:`export_library` writes the library as JSON (exactly the library file format, so
   :func:`import_library` round-trips it) or as CSV (one row per holder, units in the
   header) for spreadsheets.
@@ -9,7 +11,10 @@
   another tool or stick-out (MODEL.md §9); :func:`write_receptance_csv` and
   :func:`write_receptance_uff58` write it for other software (pyuff imported lazily).
 
-Every file is written atomically (:func:`taptune.io.atomic.atomic_write`).
+Every file is written atomically (:func:`taptune.io.atomic.atomic_write`). The functions
+work on entries and files; those given a library (``lib``) use only its ``target``,
+``entries()`` and ``edit()``, so this module never imports :mod:`taptune.library.store`
+(the store imports it).
 """
 
 from __future__ import annotations
@@ -24,12 +29,30 @@ import numpy as np
 
 from taptune.errors import InputError, LibraryError
 from taptune.io.atomic import atomic_write, atomic_write_bytes
-from taptune.library.schema import PARAM_UNITS, HolderEntry, encode
-from taptune.library.store import HolderLibrary, read_library_file
+from taptune.library.schema import PARAM_UNITS, HolderEntry, LibraryFormatError, decode, encode, parse_library
 from taptune.model.params import NAMES
 
 FORMATS = ("json", "csv")
 RECEPTANCE_SUFFIXES = {".uff": "uff58", ".unv": "uff58", ".csv": "csv"}
+
+
+# --------------------------------------------------------------------------- read
+
+
+def read_library_file(path: str | os.PathLike, missing_ok: bool = False) -> dict[str, HolderEntry]:
+    """Read and validate a holder-library JSON file; a missing file is empty if ``missing_ok``."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        if missing_ok:
+            return {}
+        raise LibraryFormatError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise LibraryFormatError(f"{path}: is a folder, not a holder library file") from None
+    except OSError as err:
+        raise LibraryFormatError(f"{path}: cannot read the holder library ({err.strerror})") from None
+    return parse_library(decode(raw, str(path)), str(path))
 
 
 # --------------------------------------------------------------------------- export
@@ -61,30 +84,41 @@ def library_csv(entries: dict[str, HolderEntry]) -> str:
     return out.getvalue()
 
 
-def export_library(lib: HolderLibrary, out: str | os.PathLike, format: str = "json") -> int:
+def export_library(lib, out: str | os.PathLike, format: str = "json") -> int:
     """Write every holder of ``lib`` to ``out``; returns how many.
 
     Parameters
     ----------
     lib : HolderLibrary
+        The library (never the file being written).
     out : path
         Output file (created with its folders; replaced atomically if it exists).
     format : {"json", "csv"}
         ``"json"``: the library file format (:func:`import_library` reads it back to the
         same entries). ``"csv"``: a table for spreadsheets; it cannot be imported.
     """
-    if format not in FORMATS:
-        raise InputError(f"export format must be one of {', '.join(FORMATS)}, got {format!r}")
+    _check_format(format)
     out = Path(out)
     if Path(os.path.realpath(out)) == lib.target:
         raise InputError(f"{out}: is the library being exported; choose another file")
-    entries = lib.entries()
+    return export_entries(lib.entries(), out, format)
+
+
+def export_entries(entries: dict[str, HolderEntry], out: str | os.PathLike, format: str = "json") -> int:
+    """Write ``entries`` to ``out`` as JSON (the library file format) or CSV; returns how many."""
+    _check_format(format)
+    out = Path(out)
     if format == "json":
         data = encode(entries, str(out))
     else:
         data = library_csv(entries).encode("utf-8")
     _write_output(out, lambda: atomic_write_bytes(out, data))
     return len(entries)
+
+
+def _check_format(format: str) -> None:
+    if format not in FORMATS:
+        raise InputError(f"export format must be one of {', '.join(FORMATS)}, got {format!r}")
 
 
 def _write_output(out: Path, write) -> None:
@@ -161,37 +195,46 @@ class ImportReport:
         return out
 
 
-def import_library(lib: HolderLibrary, file: str | os.PathLike, replace: bool = False) -> ImportReport:
-    """Merge the holders of a library file into ``lib``.
+def import_library(lib, file: str | os.PathLike, replace: bool = False) -> ImportReport:
+    """Merge the holders of a library file into ``lib`` (a HolderLibrary), under its lock.
 
-    The whole file is validated first; an invalid file changes nothing. New holders are
-    added; identical ones skipped; a holder whose parameters match but whose history has
-    new records gets them appended. A holder with the same name but different parameters
-    (or sets, geometry, model options) is a conflict: kept as it is, or replaced by the
-    imported one when ``replace`` (the identification history of both is kept).
+    The whole file is validated first; an invalid file changes nothing. See
+    :func:`merge_entries` for what happens to each holder.
     """
     theirs = read_library_file(file)
-    added, merged, skipped, conflicts = [], [], [], []
     with lib.edit() as holders:
-        for name in sorted(theirs):
-            incoming, current = theirs[name], holders.get(name)
-            if current is None:
-                holders[name] = incoming
-                added.append(name)
-                continue
-            differences = current.differences(incoming)
-            combined = incoming.superseding(current)
-            if not differences:
-                if combined == current:
-                    skipped.append(name)
-                else:
-                    holders[name] = combined
-                    merged.append(name)
-                continue
-            conflicts.append(Conflict(name, tuple(differences)))
-            if replace:
+        return merge_entries(holders, theirs, replace, source=str(file))
+
+
+def merge_entries(holders: dict[str, HolderEntry], theirs: dict[str, HolderEntry], replace: bool, source: str) -> ImportReport:
+    """Merge ``theirs`` into the dict ``holders`` in place; returns what was done.
+
+    New holders are added; identical ones skipped; a holder whose parameters match but
+    whose history has new records gets them appended. A holder with the same name but
+    different parameters (or sets, geometry, model options) is a conflict: kept as it is,
+    or replaced by the imported one when ``replace`` (the identification history of both
+    is kept).
+    """
+    added, merged, skipped, conflicts = [], [], [], []
+    for name in sorted(theirs):
+        incoming, current = theirs[name], holders.get(name)
+        if current is None:
+            holders[name] = incoming
+            added.append(name)
+            continue
+        differences = current.differences(incoming)
+        combined = incoming.superseding(current)
+        if not differences:
+            if combined == current:
+                skipped.append(name)
+            else:
                 holders[name] = combined
-    return ImportReport(str(file), tuple(added), tuple(merged), tuple(skipped), tuple(conflicts), bool(replace and conflicts))
+                merged.append(name)
+            continue
+        conflicts.append(Conflict(name, tuple(differences)))
+        if replace:
+            holders[name] = combined
+    return ImportReport(source, tuple(added), tuple(merged), tuple(skipped), tuple(conflicts), bool(replace and conflicts))
 
 
 # --------------------------------------------------------------------------- a holder with a tool

@@ -21,15 +21,8 @@ from typing import Iterator
 
 from taptune.errors import LibraryError
 from taptune.io.atomic import atomic_write_bytes, remove_stale_temporaries
-from taptune.library.schema import (
-    HolderEntry,
-    LibraryFormatError,
-    UnknownHolderError,
-    checked_entry,
-    decode,
-    encode,
-    parse_library,
-)
+from taptune.library.exchange import ImportReport, export_library, import_library, read_library_file
+from taptune.library.schema import HolderEntry, UnknownHolderError, checked_entry, encode
 
 ENV_VAR = "TAPTUNE_LIBRARY"
 FILE_NAME = "holders.json"
@@ -98,23 +91,6 @@ def _unlock(fd: int) -> None:
 
 
 # --------------------------------------------------------------------------- library
-
-
-def read_library_file(path: str | os.PathLike, missing_ok: bool = False) -> dict[str, HolderEntry]:
-    """Read and validate a holder-library JSON file; a missing file is empty if ``missing_ok``."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        if missing_ok:
-            return {}
-        raise LibraryFormatError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise LibraryFormatError(f"{path}: is a folder, not a holder library file") from None
-    except OSError as err:
-        raise LibraryFormatError(f"{path}: cannot read the holder library ({err.strerror})") from None
-    return parse_library(decode(raw, str(path)), str(path))
-
 
 
 class HolderLibrary:
@@ -281,12 +257,8 @@ class HolderLibrary:
 
     def export(self, out: str | os.PathLike, format: str = "json") -> int:
         """Write the library to ``out`` as JSON (the library format) or CSV; returns the holder count."""
-        from taptune.library.exchange import export_library
-
         return export_library(self, out, format)
 
-    def import_file(self, file: str | os.PathLike, replace: bool = False):
+    def import_file(self, file: str | os.PathLike, replace: bool = False) -> ImportReport:
         """Merge a library file into this one; returns an :class:`~taptune.library.exchange.ImportReport`."""
-        from taptune.library.exchange import import_library
-
         return import_library(self, file, replace=replace)

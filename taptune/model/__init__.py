@@ -1,7 +1,7 @@
 """Free-free Timoshenko model of a tool in a holder (MODEL.md §1–§7).
 
-geometry → mesh → elements → contact → assembly → modes → receptance. The public
-entry points are re-exported here; submodules are imported on first use of a name so
+geometry → mesh → elements → contact → assembly (fe) → modes (eigen) → receptance
+(modes). The public entry points are re-exported here; submodules are imported on first use of a name so
 that ``import taptune.model.params`` stays light.
 """
 
@@ -14,9 +14,9 @@ _EXPORTS = {
     "FEModel": "fe",
     "build_model": "fe",
     "rigid_contact_model": "fe",
-    "Modes": "modes",
-    "ModelError": "modes",
-    "solve_modes": "modes",
+    "Modes": "eigen",
+    "ModelError": "eigen",
+    "solve_modes": "eigen",
     "tip_receptance": "modes",
     "mode_shapes": "modes",
     "ModelResult": "modes",

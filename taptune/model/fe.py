@@ -21,6 +21,7 @@ import scipy.sparse as sp
 
 from taptune.io.assembly import Assembly
 from taptune.model.contact import contact_blocks
+from taptune.model.eigen import solve_modes
 from taptune.model.mesh import Mesh, build_mesh
 from taptune.model.options import ModelOptions
 from taptune.model.params import P_LOWER, P_UPPER, HolderParams
@@ -304,8 +305,6 @@ def stiffest_holder() -> HolderParams:
 
 def highest_bending_hz(fe: "FEModel", mode: int = 3) -> float:
     """Upper bound of bending mode ``mode`` over the search space [Hz] (MODEL.md §7.6)."""
-    from taptune.model.modes import solve_modes  # modes builds on this module
-
     return float(solve_modes(rigid_contact_model(fe), stiffest_holder(), mode).frequency_hz[mode - 1])
 
 
