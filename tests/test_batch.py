@@ -174,21 +174,21 @@ def tiny(tmp_path, **kw) -> BatchOptions:
 def junk_pair_with_a_misbehaving_worker(tmp_path, monkeypatch, misbehave) -> None:
     """a.wav and b.wav (1 byte of junk each, with assemblies); the worker of a.wav runs ``misbehave()`` first.
 
-    Workers are forked, so they see the monkeypatched ``run_job``.
+    Workers are forked, so they see the monkeypatched ``run_job`` (the pool's name for it).
     """
-    import taptune.batch as batch
+    import taptune.batch.pool as pool
 
     for stem in ("a", "b"):
         (tmp_path / f"{stem}.wav").write_bytes(b"x")
         (tmp_path / f"{stem}.toml").write_text(assembly_text(stem))
-    real = batch.run_job
+    real = pool.run_job
 
     def patched(items, options, progress=None):
         if items[0].path.name == "a.wav":
             misbehave()
         return real(items, options, progress)
 
-    monkeypatch.setattr(batch, "run_job", patched)
+    monkeypatch.setattr(pool, "run_job", patched)
 
 
 def test_a_worker_that_dies_is_an_error_row_and_the_batch_goes_on(tmp_path, monkeypatch):
@@ -215,14 +215,14 @@ def test_a_job_over_the_timeout_is_stopped_and_the_others_finish(tmp_path, monke
 
 
 def test_an_unexpected_exception_is_one_line_and_its_traceback_goes_to_the_log(tmp_path, monkeypatch):
-    import taptune.identify.pipeline as pipeline
+    import taptune.batch.job as job
 
     write_case(tmp_path, "a", "ER32 a")
 
     def boom(*args, **kwargs):
         raise ZeroDivisionError("division by zero\nsecond line")
 
-    monkeypatch.setattr(pipeline, "analyse_for_assembly", boom)
+    monkeypatch.setattr(job, "analyse_for_assembly", boom)
     result = run_batch([tmp_path], tiny(tmp_path))
     (row,) = result.rows
     assert (row.status, row.message) == ("error", "ZeroDivisionError: division by zero second line")
@@ -267,14 +267,14 @@ def test_summary_csv_round_trips(tmp_path):
 
 
 def test_a_report_page_that_cannot_be_made_leaves_the_identification_ok(tmp_path, monkeypatch):
-    import taptune.report.pdf as pdf
+    import taptune.batch.job as job
 
     write_case(tmp_path, "a", "ER32 a")
 
     def broken(*args, **kwargs):
         raise RuntimeError("no page today")
 
-    monkeypatch.setattr(pdf, "report_pages", broken)
+    monkeypatch.setattr(job, "report_pages", broken)
     result = run_batch([tmp_path], tiny(tmp_path, keep_pages=True))
     assert [r.status for r in result.rows] == ["ok"] and result.pages == ()
     assert "no page today" in (tmp_path / "out" / "errors.log").read_text()

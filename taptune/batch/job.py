@@ -1,0 +1,100 @@
+"""One job, in a worker process: analyse, identify, store in the library, write the result JSONs.
+
+A bad recording never raises out of :func:`run_job`: every item gets a row, and an
+unexpected exception's traceback goes to ``errors.log``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import is_dataclass, replace
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Sequence
+
+from taptune.batch.outputs import log_error, result_json
+from taptune.batch.records import BatchOptions, Item, Outcome, ProgressCallback, Row, first_three, one_line, rows_for
+from taptune.cli.common import write_json
+from taptune.errors import InputError
+from taptune.identify import identify
+from taptune.identify.pipeline import analyse_for_assembly
+from taptune.io.audio import read_audio
+from taptune.library.record import save_identification
+from taptune.report.pdf import recording_view, report_pages
+
+
+def _analyse(items, id_options, out_dir: Path):
+    """Read and analyse each recording on its own, so one bad file does not sink its group."""
+    good, rows = [], []
+    for item in items:
+        try:
+            recording = read_audio(item.path)
+            good.append((item, recording, analyse_for_assembly(recording, item.assembly, None, id_options.model)))
+        except InputError as err:
+            rows.append(Row(str(item.path), item.holder, "failed", message=one_line(err)))
+        except Exception as err:  # noqa: BLE001 - one recording's surprise must not stop the batch
+            log_error(out_dir, [item], err)
+            rows.append(Row(str(item.path), item.holder, "error", message=one_line(err)))
+    return good, rows
+
+
+def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCallback | None = None) -> Outcome:
+    """Identify one recording, or one holder's recordings jointly; store and write the results.
+
+    Never raises for a bad recording: every item gets a row. The library is written
+    before the result JSON, so a JSON on disk always means the library has the holder.
+    """
+    t0 = time.perf_counter()
+    out_dir = Path(options.out_dir)
+    id_options = options.identify_options()
+    good, rows = _analyse(items, id_options, out_dir)
+    if not good:
+        return Outcome(tuple(rows))
+    group = [g[0] for g in good]
+    recordings = [g[1] for g in good]
+    analyses = [g[2] for g in good]
+    assemblies = [i.assembly for i in group]
+    try:
+        result = identify(analyses, assemblies, id_options, progress=progress)
+        if options.save:
+            save_identification(options.library, result, recordings, assemblies)
+        seconds = time.perf_counter() - t0
+        done = []  # rows join the outcome only when every file of the job is written
+        for k, item in enumerate(group):
+            view = recording_view(result, k)
+            data = result_json(view, item, recordings[k], analyses[k], group, result.objective)
+            write_json(data, str(item.json_path))
+            done.append(Row(str(item.path), item.holder, "ok", first_three(view.bending_measured_hz[0]),
+                            first_three(view.bending_model_hz[0]), view.objective, seconds, _warning_note(data)))
+    except InputError as err:
+        return Outcome(tuple(rows + rows_for(group, "failed", one_line(err), time.perf_counter() - t0)))
+    except Exception as err:  # noqa: BLE001 - reported as status "error", traceback to errors.log
+        log_error(out_dir, group, err)
+        return Outcome(tuple(rows + rows_for(group, "error", one_line(err), time.perf_counter() - t0)))
+    pages = _pages(result, analyses, recordings, assemblies, id_options.model, out_dir) if options.keep_pages else ()
+    return Outcome(tuple(rows + done), pages)
+
+
+def _pages(result, analyses, recordings, assemblies, model_options, out_dir: Path) -> tuple:
+    """Report pages of a finished identification; none (and a log entry) if they cannot be made.
+
+    The identification itself is stored and written by then: a report problem must not
+    turn it into a failure.
+    """
+    try:
+        return tuple(report_pages(result, [_slim(a) for a in analyses], recordings, assemblies, model_options))
+    except Exception as err:  # noqa: BLE001 - logged; the summary page still lists the recording
+        log_error(out_dir, [SimpleNamespace(path=r.path) for r in recordings], err)
+        return ()
+
+
+def _warning_note(data: dict) -> str:
+    n = len(data.get("warnings", ()))
+    return "" if n == 0 else f"{n} warning{'s' if n > 1 else ''}: {one_line(data['warnings'][0])}"
+
+
+def _slim(analysis):
+    """The analysis without per-tap spectra (the report does not draw them; the pickle shrinks)."""
+    if is_dataclass(analysis) and hasattr(analysis, "tap_magnitudes"):
+        return replace(analysis, tap_magnitudes=analysis.tap_magnitudes[:0], noise_magnitude=None)
+    return analysis
