@@ -18,7 +18,7 @@ def add_parser(sub, name, help_text):
         "Free-free Timoshenko model of a tool clamped in a holder: the bending frequencies and "
         "damping ratios for the nominal holder parameters, a library holder's (--holder) or "
         "those in a JSON file (--params)."))
-    p.add_argument("assembly", help="assembly TOML file (ASSEMBLY-FORMAT.md)")
+    p.add_argument("assembly", help="assembly TOML file (docs/assembly-format.md)")
     source = p.add_mutually_exclusive_group()
     source.add_argument("--holder", metavar="NAME", help="use this library holder's parameters")
     source.add_argument("--params", metavar="JSON_FILE",
