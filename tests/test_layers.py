@@ -150,6 +150,15 @@ def test_no_module_imports_one_that_imports_it_back():
     )
 
 
+@pytest.mark.parametrize("name, path", list(modules()), ids=lambda v: v if isinstance(v, str) else "")
+def test_atomic_file_writing_comes_from_io(name, path):
+    """Writing a file atomically is an io concern: nobody fetches it from the library room."""
+    for node, target in import_statements(path, name):
+        if isinstance(node, ast.ImportFrom) and target != "taptune.io.atomic":
+            wrong = [a.name for a in node.names if a.name.startswith("atomic_write")]
+            assert not wrong, f"{name} imports {', '.join(wrong)} from {target}: import it from taptune.io.atomic"
+
+
 def test_cli_help_loads_no_heavy_library():
     code = (
         "import sys; from taptune.cli import main; main(['--help']);"
