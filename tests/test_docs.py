@@ -55,11 +55,24 @@ def test_pages_refer_to_nothing_outside_the_project(page):
     named = [note for note in DESIGN_NOTES if note in text]
     assert not named, f"{page.name} refers to design notes users do not have: {', '.join(named)}"
     for target in links(page):
-        if re.match(r"[a-z]+:", target) or target.startswith("#"):
-            continue  # a web address, mailto: or an anchor in the page
-        path = (page.parent / target.split("#")[0]).resolve()
+        if re.match(r"[a-z]+:", target):
+            continue  # a web address or mailto:
+        if target.startswith("#"):
+            assert target[1:] in anchors(page), f"{page.name}: link {target}: no such heading"
+            continue
+        file, _, anchor = target.partition("#")
+        path = (page.parent / file).resolve()
         assert path.is_relative_to(REPO.resolve()), f"{page.name}: link {target} leaves the project"
         assert path.exists(), f"{page.name}: link {target} points to a file that does not exist"
+        if anchor and path.suffix == ".md":
+            assert anchor in anchors(path), f"{page.name}: link {target}: no such heading in {path.name}"
+
+
+def anchors(page: Path) -> set[str]:
+    """The anchors GitHub gives the headings of a Markdown page."""
+    text = re.sub(r"```.*?```", "", page.read_text(encoding="utf-8"), flags=re.S)
+    titles = re.findall(r"^#+\s+(.*?)\s*$", text, flags=re.M)
+    return {"".join(c for c in t.lower().replace(" ", "-") if c.isalnum() or c in "-_") for t in titles}
 
 
 def test_the_link_checker_reads_both_link_forms(tmp_path):
