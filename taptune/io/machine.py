@@ -250,7 +250,8 @@ def _check_values(name: str, freq_hz, *arrays) -> np.ndarray:
 def _table_text(header: tuple[str, ...], columns, comments=()) -> str:
     lines = [f"# {c}" for c in comments] + [",".join(header)]
     data = np.column_stack(columns)
-    lines += [",".join(f"{v:.10g}" for v in row) for row in data]
+    # Frequencies exact (a grid point stays a grid point), values to 10 significant digits.
+    lines += [",".join([f"{row[0]:.15g}"] + [f"{v:.10g}" for v in row[1:]]) for row in data]
     return "\n".join(lines) + "\n"
 
 
@@ -269,7 +270,7 @@ def read_spindle(path) -> SpindleReceptance:
 
 
 def write_spindle_csv(path, spindle: SpindleReceptance, comments=()) -> None:
-    """Write a spindle receptance as CSV (10 significant digits), ``comments`` as ``#`` lines first."""
+    """Write a spindle receptance as CSV (values to 10 significant digits), ``comments`` as ``#`` lines first."""
     h = np.asarray(spindle.h, dtype=complex)
     f = _check_values(str(path), spindle.freq_hz, h[:, 0, 0], h[:, 0, 1], h[:, 1, 1])
     cols = [f]
