@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
+import secrets
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -221,15 +221,16 @@ def check_frequency_axis(path, freq_hz: np.ndarray, lines=None) -> np.ndarray:
 def _atomic_write_text(path, text: str, what: str) -> None:
     """Write ``text`` through a temporary file in the same folder (a crash never leaves half a file)."""
     target = Path(path)
+    # A unique name (two runs may share a folder); open() applies the umask as for any new file.
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.part")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
         try:
-            with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            with open(tmp, "x", encoding="utf-8", newline="\n") as fh:
                 fh.write(text)
             os.replace(tmp, target)
         except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+            tmp.unlink(missing_ok=True)
             raise
     except OSError as err:
         raise InputError(f"{path}: cannot write the {what} ({err.strerror})") from None
