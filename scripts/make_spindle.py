@@ -122,7 +122,8 @@ def main() -> None:
         "# stepped shaft on three lossy bearings. Not a measurement of a real machine.\n"
         "[machine]\n"
         'name = "Example HSK-A63 spindle (synthetic)"\n'
-        'interface = "HSK-A63"\n\n'
+        'interface = "HSK-A63"\n'
+        "max_rpm = 24000        # top speed: the default top of the lobe diagram\n\n"
         "[spindle]\n"
         'x = "spindle_x.csv"   # relative to this file\n'
         'y = "spindle_y.csv"\n',

@@ -6,8 +6,8 @@ the file and the problem (missing file or column, text in a number, NaN, an unso
 duplicate or non-positive frequency axis, an empty table). The physics that uses these
 files lives in :mod:`taptune.machine`.
 
-* :func:`load_machine` — the machine TOML (``[machine]`` name, interface; ``[spindle]``
-  x and optional y, paths relative to the TOML) → :class:`Machine`.
+* :func:`load_machine` — the machine TOML (``[machine]`` name, interface, optional
+  max_rpm; ``[spindle]`` x and optional y, paths relative to the TOML) → :class:`Machine`.
 * :func:`read_spindle` / :func:`write_spindle_csv` — the spindle receptance of one
   bending direction, CSV ``f_hz,h_wf_re,h_wf_im,h_wm_re,h_wm_im,h_tm_re,h_tm_im`` or
   UFF58 (three functions, told apart by their response/reference directions).
@@ -130,7 +130,9 @@ class ToolpointFrf:
 class Machine:
     """A machine file: the spindle receptance at the coupling plane in x and y.
 
-    ``y_from_x`` is True when the file gives no ``[spindle] y`` and x is used for y.
+    ``y_from_x`` is True when the file gives no ``[spindle] y`` and x is used for y;
+    ``max_rpm`` is the spindle's top speed (``[machine] max_rpm``, optional; the default
+    top of the lobe diagram).
     """
 
     name: str
@@ -139,9 +141,10 @@ class Machine:
     y: SpindleReceptance
     source: str = ""
     y_from_x: bool = False
+    max_rpm: float | None = None
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "interface": self.interface, "file": self.source,
+        return {"name": self.name, "interface": self.interface, "file": self.source, "max_rpm": self.max_rpm,
                 "spindle_x": self.x.source, "spindle_y": self.y.source}
 
 
@@ -403,6 +406,9 @@ def load_machine(path) -> Machine:
     s = r.table(data, "spindle")
     name = r.text(m, "name", "[machine]")
     interface = r.text(m, "interface", "[machine]")
+    max_rpm = r.number(m, "max_rpm", "[machine]") if "max_rpm" in m else None
+    if max_rpm is not None and max_rpm <= 0:
+        r.fail("[machine] max_rpm", f"must be > 0, got {max_rpm:g}")
     unknown = sorted(set(s) - {"x", "y"})
     if unknown:
         r.fail(f"[spindle] {unknown[0]}", "is not a direction (x and y are)")
@@ -410,7 +416,7 @@ def load_machine(path) -> Machine:
     x = read_spindle(_relative(folder, r.text(s, "x", "[spindle]")))
     y_name = r.text(s, "y", "[spindle]", "")
     y = read_spindle(_relative(folder, y_name)) if y_name else x
-    return Machine(name, interface, x, y, str(path), y_from_x=not y_name)
+    return Machine(name, interface, x, y, str(path), y_from_x=not y_name, max_rpm=max_rpm)
 
 
 def _relative(folder: Path, name: str) -> str:

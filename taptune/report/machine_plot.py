@@ -12,6 +12,14 @@ import numpy as np
 from taptune.report.fit_plot import _pyplot, _save
 
 UM_PER_N = 1e6  # m/N → µm/N for the axes (a machinist reads µm/N)
+MARKED_POCKETS = 8
+
+
+def _wrap(title: str, width: int = 100) -> str:
+    """Each line of ``title`` wrapped to fit an 8-inch figure at 9 pt."""
+    import textwrap
+
+    return "\n".join(textwrap.fill(line, width) for line in title.splitlines())
 
 
 def plot_toolpoint(curves, path, title: str = "") -> None:
@@ -42,7 +50,7 @@ def plot_toolpoint(curves, path, title: str = "") -> None:
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8, ncol=2)
-    axes[0].set_title(title or "tool-point FRF on the machine", fontsize=9)
+    axes[0].set_title(_wrap(title or "tool-point FRF on the machine"), fontsize=9)
     _save(fig, path)
 
 
@@ -56,7 +64,8 @@ def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, 
     a_crit_mm : float
         The lowest limit over all speeds [mm] (stable at any speed below it).
     pockets : list of dict
-        ``{"rpm", "a_lim_mm"}`` of the lobe peaks, best first; the best few are labelled.
+        ``{"rpm", "a_lim_mm"}`` of the lobe peaks, best first; the best eight are marked and
+        the best three labelled.
     chatter_hz : array_like, shape (n,), optional
         Chatter frequency on the boundary [Hz]; drawn in a second panel when given.
     """
@@ -70,7 +79,8 @@ def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, 
     ax.fill_between(rpm, 0, a, color="#27ae60", alpha=0.15, lw=0, label="stable")
     ax.plot(rpm, a, color="#1e8449", lw=1.4, label="stability limit")
     ax.axhline(a_crit_mm, color="#c0392b", ls="--", lw=1.0, label=f"critical depth {a_crit_mm:.3g} mm")
-    for k, p in enumerate(pockets):
+    # The best few pockets only: at low speed the lobes crowd into many tiny peaks.
+    for k, p in enumerate(pockets[:MARKED_POCKETS]):
         ax.plot(p["rpm"], p["a_lim_mm"], "v", color="#2c3e50", ms=6 if k < 3 else 4)
         if k < 3:
             ax.annotate(f"{p['rpm']:.0f} rpm\n{p['a_lim_mm']:.2g} mm", (p["rpm"], p["a_lim_mm"]),
@@ -81,7 +91,7 @@ def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, 
     ax.set_ylabel("axial depth of cut a_p [mm]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    ax.set_title(title or "stability lobes (zero-order approximation)", fontsize=9)
+    ax.set_title(_wrap(title or "stability lobes (zero-order approximation)"), fontsize=9)
     if chatter_hz is not None:
         axes[1, 0].plot(rpm, np.asarray(chatter_hz, dtype=float), ".", ms=1.5, color="#2c3e50")
         axes[1, 0].set_ylabel("chatter [Hz]")

@@ -133,3 +133,99 @@ def test_toolpoint_bad_inputs_end_in_one_line(tmp_path, capsys):
     err = one_line_error(capsys, "toolpoint", RECORDINGS / "er32_d16.toml", "--holder", "nothing", "--library", library,
                          "--machine", machine)
     assert "nothing" in err and not library.exists()
+
+
+# --------------------------------------------------------------------------- lobes
+
+
+LOBES_KEYS = {"rpm", "a_lim_mm", "a_crit_mm", "pockets", "chatter_hz"}
+
+
+def test_lobes_single_mode_slotting_matches_the_closed_form(tmp_path, capsys):
+    """MODEL.md §13.6: slotting, x flexible with one mode, y rigid: a_lim,min = 8 k ζ (1 + ζ) / (N K_rc)
+    = 1.679 mm for k = 1e7 N/m, ζ = 0.02, N = 4, K_rc = 243 MPa (K_tc does not enter)."""
+    k, zeta, fn = 1e7, 0.02, 1200.0
+    f = np.arange(600.0, 2400.0 + 0.5, 1.0)
+    w, wn = 2 * np.pi * f, 2 * np.pi * fn
+    g = 1.0 / (k * (1 - (w / wn) ** 2) + 1j * 2 * zeta * k * w / wn)
+    rigid = np.full_like(g, 1e-15 + 0j)
+    path = tmp_path / "one_mode.csv"
+    from taptune.io.machine import write_toolpoint_csv
+
+    write_toolpoint_csv(path, f, g, rigid)
+    out = tmp_path / "l.json"
+    code, text, err = taptune(capsys, "lobes", "--frf", path, "--teeth", 4, "--ktc", 902, "--krc", 243,
+                              "--diameter", 12, "--ae", 12, "--milling", "down", "--rpm", 2000, 20000, 5, "--json", out)
+    assert code == 0, err
+    assert "slotting" in text
+    data = json.loads(out.read_text())
+    assert set(data) >= LOBES_KEYS
+    assert data["a_crit_mm"] == pytest.approx(8 * k * zeta * (1 + zeta) / (4 * 243e6) * 1e3, rel=2e-3)
+    assert data["a_crit_mm"] == pytest.approx(1.679, rel=2e-3)
+    assert data["rpm"][0] == 2000 and data["rpm"][-1] == 20000  # MAX on the grid is included
+    # The k = 0 pocket of a single mode lies just above 60 f_n / N (the chatter frequency is above f_n).
+    best = data["pockets"][0]
+    assert 60 * fn / 4 < best["rpm"] < 1.1 * 60 * fn / 4
+
+
+@needs_d01
+def test_lobes_from_the_d01_frf_match_the_independent_truth(tmp_path, capsys):
+    truth = json.loads((D01 / "lobes_truth.json").read_text())
+    a = truth["args"]
+    out = tmp_path / "l.json"
+    code, _, err = taptune(capsys, "lobes", "--frf", D01 / "toolpoint_frf.csv", "--teeth", a["teeth"], "--ktc", a["ktc"],
+                           "--krc", a["krc"], "--diameter", a["diameter"], "--ae", a["ae"], "--milling", a["milling"],
+                           "--rpm", *a["rpm"], "--json", out, "--csv", tmp_path / "l.csv")
+    assert code == 0, err
+    data = json.loads(out.read_text())
+    np.testing.assert_allclose(data["rpm"], truth["rpm"])
+    envelope = relative_error(data["a_lim_mm"], truth["a_lim_mm"])
+    assert np.median(envelope) <= 0.01, np.median(envelope)
+    assert data["a_crit_mm"] == pytest.approx(truth["a_crit_mm"], rel=0.01)
+    rows = (tmp_path / "l.csv").read_text().splitlines()
+    assert rows[0] == "rpm,a_lim_mm,chatter_hz" and len(rows) == len(truth["rpm"]) + 1
+
+
+def test_lobes_on_the_machine_equal_lobes_from_the_toolpoint_csv(tmp_path, capsys):
+    """The two routes of MACHINE.md (predicted on the machine, --frf of the written FRF) agree."""
+    cut = ["--teeth", 4, "--material", "al6082", "--ae", 8, "--milling", "down", "--rpm", 8000, 20000, 20]
+    code, text, err = taptune(capsys, "lobes", *DEMO, *cut, "--freq", 200, 8000, 2, "--json", tmp_path / "a.json",
+                              "--plot", tmp_path / "lobes.png")
+    assert code == 0, err
+    assert "critical depth" in text and "pocket [rpm]" in text
+    code, _, err = taptune(capsys, "toolpoint", *DEMO, "--freq", 200, 8000, 2, "--csv", tmp_path / "tp.csv")
+    assert code == 0, err
+    code, _, err = taptune(capsys, "lobes", "--frf", tmp_path / "tp.csv", "--diameter", 16, *cut, "--json", tmp_path / "b.json")
+    assert code == 0, err
+    a, b = (json.loads((tmp_path / n).read_text()) for n in ("a.json", "b.json"))
+    # The CSV holds 10 significant digits; the lobes move by far less than that allows.
+    np.testing.assert_allclose(a["a_lim_mm"], b["a_lim_mm"], rtol=1e-6)
+    assert a["cut"]["diameter_mm"] == 16.0  # the assembly's flute diameter by default
+    assert (tmp_path / "lobes.png").stat().st_size > 10_000
+
+
+def test_lobes_default_speed_range_reaches_the_machine_top_speed(tmp_path, capsys):
+    code, _, err = taptune(capsys, "lobes", *DEMO, "--teeth", 3, "--ktc", 800, "--krc", 200, "--ae", 4, "--milling", "up",
+                           "--freq", 200, 8000, 4, "--json", tmp_path / "l.json")
+    assert code == 0, err
+    rpm = json.loads((tmp_path / "l.json").read_text())["rpm"]
+    assert rpm[0] == 500 and rpm[-1] == 24000  # [machine] max_rpm of the example
+
+
+def test_lobes_bad_inputs_end_in_one_line(tmp_path, capsys):
+    cut = ["--teeth", 4, "--ktc", 902, "--krc", 243, "--ae", 5, "--milling", "down"]
+    bad = tmp_path / "dup.csv"
+    bad.write_text("f_hz,xx_re,xx_im\n100,1e-8,-1e-9\n200,1e-8,-1e-9\n200,1e-8,-1e-9\n")
+    assert "dup.csv: frequency 200 Hz appears twice (line 4)" in one_line_error(
+        capsys, "lobes", "--frf", bad, "--diameter", 10, *cut)
+    good = tmp_path / "good.csv"
+    good.write_text("f_hz,xx_re,xx_im\n" + "".join(f"{f},1e-8,-1e-9\n" for f in range(100, 200, 10)))
+    assert "--diameter" in one_line_error(capsys, "lobes", "--frf", good, *cut)
+    assert "belong to the predicted one" in one_line_error(capsys, "lobes", *DEMO, "--frf", good, "--diameter", 10, *cut)
+    assert "--material" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, "--teeth", 4, "--ae", 5,
+                                          "--milling", "up")
+    assert "unknown work material 'unobtainium'" in one_line_error(
+        capsys, "lobes", "--frf", good, "--diameter", 10, "--teeth", 4, "--ae", 5, "--milling", "up", "--material", "unobtainium")
+    assert "exceeds the tool diameter" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 4, *cut)
+    assert "--rpm 500 100 10" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 500, 100, 10)
+    assert "--frf CSV" in one_line_error(capsys, "lobes", *cut)

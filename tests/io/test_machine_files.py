@@ -122,6 +122,8 @@ def test_machine_relative_paths_and_y_defaults_to_x(tmp_path):
     ('[machine]\nname = "M"\ninterface = "HSK-A63"\n[spindle]\ny = "sx.csv"\n', r"\[spindle\] x is missing"),
     ('[machine]\nname = "M"\ninterface = "HSK-A63"\n[spindle]\nx = 3\n', r"\[spindle\] x must be a non-empty string"),
     (MACHINE + 'z = "sx.csv"\n', r"\[spindle\] z is not a direction"),
+    (MACHINE.replace("[spindle]", "max_rpm = -5\n[spindle]"), r"\[machine\] max_rpm must be > 0, got -5"),
+    (MACHINE.replace("[spindle]", "max_rpm = 'fast'\n[spindle]"), r"\[machine\] max_rpm must be a number"),
 ])
 def test_machine_bad_toml(tmp_path, text, message):
     write_spindle_csv(tmp_path / "sx.csv", spindle())
@@ -139,7 +141,7 @@ def test_machine_names_the_missing_spindle_file(tmp_path):
 
 def test_bundled_example_machine():
     m = load_machine(REPO / "recordings" / "machine" / "machine.toml")
-    assert m.interface == "HSK-A63" and not m.y_from_x
+    assert m.interface == "HSK-A63" and not m.y_from_x and m.max_rpm == 24000
     for s in (m.x, m.y):
         assert s.freq_hz[0] <= 100 and s.freq_hz[-1] >= 12000
         # A spindle nose on bearings: static compliance of a few nm/N (100-500 N/µm).
