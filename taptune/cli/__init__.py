@@ -22,6 +22,7 @@ COMMANDS = {
     "predict": "predict a library holder with a tool at other stick-outs",
     "toolpoint": "tool-point FRF of a holder and tool on a machine (spindle receptance coupling)",
     "lobes": "milling stability lobes from the tool-point FRF (zero-order approximation)",
+    "spindle": "spindle receptance from hammer tests on a dummy holder (inverse receptance coupling)",
     "batch": "identify every recording under folders, in parallel",
     "library": "list, show, export, import or remove holders; export receptances (UFF58, CSV)",
     "record": "record taps from the microphone into a WAV file",

@@ -100,28 +100,30 @@ def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, 
     _save(fig, path)
 
 
-def plot_spindle(freq_hz, h, path, untrusted_hz=(), title: str = "") -> None:
-    """Write a PNG of a spindle receptance: |h_wf|, |h_wm|, |h_θm| (log), bands not to trust shaded.
+def plot_spindle(freq_hz, h, path, trusted=None, title: str = "") -> None:
+    """Write a PNG of a spindle receptance: |h_wf|, |h_wm|, |h_θm| (log), what not to trust shaded.
 
     Parameters
     ----------
     freq_hz : array_like, shape (n,)
     h : array_like, shape (n, 2, 2), complex
         [[h_wf, h_wm], [h_θf, h_θm]] [m/N, 1/N; 1/N, rad/(N·m)].
-    untrusted_hz : list of (lo, hi)
-        Frequency bands where the result is not trustworthy [Hz].
+    trusted : array_like of bool, shape (n,), optional
+        False where the result is not trustworthy (shaded).
     """
     plt = _pyplot()
     h = np.asarray(h)
+    bad = np.zeros(len(freq_hz), bool) if trusted is None else ~np.asarray(trusted, dtype=bool)
     fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, layout="constrained")
     terms = ((0, 0, "|h_wf| [m/N]"), (0, 1, "|h_wm| [1/N]"), (1, 1, "|h_θm| [rad/(N·m)]"))
     for ax, (i, j, label) in zip(axes, terms):
         ax.loglog(freq_hz, np.abs(h[:, i, j]), color="#2c3e50", lw=1.2)
-        for lo, hi in untrusted_hz:
-            ax.axvspan(lo, hi, color="#e67e22", alpha=0.2, lw=0)
+        if bad.any():  # one artist however many bands
+            ax.fill_between(freq_hz, 0, 1, where=bad, transform=ax.get_xaxis_transform(), color="#e67e22",
+                            alpha=0.2, lw=0, step="mid")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]")
-    note = " (shaded: not trustworthy)" if len(untrusted_hz) else ""
+    note = " (shaded: not trustworthy)" if bad.any() else ""
     axes[0].set_title((title or "spindle receptance at the coupling plane") + note, fontsize=9)
     _save(fig, path)

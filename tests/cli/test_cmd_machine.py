@@ -229,3 +229,108 @@ def test_lobes_bad_inputs_end_in_one_line(tmp_path, capsys):
     assert "exceeds the tool diameter" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 4, *cut)
     assert "--rpm 500 100 10" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 500, 100, 10)
     assert "--frf CSV" in one_line_error(capsys, "lobes", *cut)
+
+
+# --------------------------------------------------------------------------- spindle
+
+
+DUMMY = """
+[holder]
+name = "test dummy D50 x 100"
+interface = "HSK-A63"
+clamp_length = 1.0
+segments = [
+  { length = 32.0, od = 48.0, id = 24.0 },
+  { length = 10.0, od = 63.0, id = 24.0 },
+  { length = 100.0, od = 50.0, id = 0.0 },
+]
+"""
+
+
+def dummy_measurements(folder, spindle, points_mm, freq_hz):
+    """Hammer tests on the dummy in the spindle: G_ij = H_ij − H_ic (H_cc + H_S)⁻¹ H_cj (MODEL.md §10.3),
+    the dummy's free-free receptances by direct solution (the command uses the modal route).
+    Written in three formats: G_aa as .frf text, G_ab as CSV, G_bb as UFF58 (or CSV without pyuff)."""
+    from taptune.io.assembly import load_holder
+    from taptune.machine.blocks import point_receptance
+    from taptune.machine.dummy import dummy_model
+    from taptune.model.params import HolderParams
+
+    (folder / "dummy.toml").write_text(DUMMY)
+    fe, dofs = dummy_model(load_holder(folder / "dummy.toml"), [p * 1e-3 for p in points_mm])
+    h = point_receptance(fe, HolderParams(k_tt=1.0, k_rr=1.0, eta_tt=0.0, eta_rr=0.0), dofs, freq_hz, method="direct")
+    x = np.linalg.inv(h[:, 2:, 2:] + spindle.at(freq_hz))
+    g = {key: h[:, i, j] - np.einsum("nk,nkl,nl->n", h[:, i, 2:], x, h[:, 2:, j])
+         for key, (i, j) in {"aa": (0, 0), "ab": (0, 1), "bb": (1, 1)}.items()}
+    paths = {"aa": folder / "g_aa.frf", "ab": folder / "g_ab.csv", "bb": folder / "g_bb.csv"}
+    paths["aa"].write_text("".join(f"{f!r}\t{v.real!r}\t{v.imag!r}\n" for f, v in zip(freq_hz.tolist(), g["aa"].tolist())))
+    for key in ("ab", "bb"):
+        paths[key].write_text("f_hz,re,im\n" + "".join(f"{f!r},{v.real!r},{v.imag!r}\n" for f, v in zip(freq_hz.tolist(), g[key].tolist())))
+    try:
+        from taptune.library.exchange import write_receptance_uff58
+
+        paths["bb"] = folder / "g_bb.uff"
+        write_receptance_uff58(paths["bb"], freq_hz, g["bb"], "G_bb")
+    except Exception:  # noqa: BLE001 - without pyuff the CSV stays
+        pass
+    return paths
+
+
+def test_spindle_recovers_the_bundled_spindle_from_dummy_tests(tmp_path, capsys):
+    """Inverse RCSA identity (MODEL.md §13.5) through files: noise-free dummy FRFs made with the example
+    spindle give it back (relative error < 1e-4 in every term; the UFF file holds 12 digits)."""
+    from taptune.io.machine import read_spindle
+
+    truth = read_spindle(RECORDINGS / "machine" / "spindle_x.csv")
+    freq = np.arange(200.0, 6000.0 + 1, 20.0)
+    paths = dummy_measurements(tmp_path, truth, (0.0, 70.0), freq)
+    out = tmp_path / "spindle_x.csv"
+    code, text, err = taptune(capsys, "spindle", "--dummy", tmp_path / "dummy.toml", "--aa", paths["aa"], "--ab", paths["ab"],
+                              "--bb", paths["bb"], "--points", 0, 70, "--out", out, "--json", tmp_path / "s.json",
+                              "--plot", tmp_path / "s.png")
+    assert code == 0, err
+    assert "trusted at" in text
+    got = read_spindle(out)
+    np.testing.assert_allclose(got.freq_hz, freq)
+    want = truth.at(freq)
+    for i, j in ((0, 0), (0, 1), (1, 1)):
+        assert np.median(relative_error(got.h[:, i, j], want[:, i, j])) < 1e-4, (i, j)
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["points"] == len(freq) and 0 <= summary["trusted_share"] <= 1
+    assert "dummy test dummy D50 x 100" in out.read_text().splitlines()[0]
+
+
+@needs_d01
+def test_spindle_from_the_d01_dummy_matches_its_spindle(tmp_path, capsys):
+    from taptune.io.machine import read_spindle
+
+    points = json.loads((D01 / "dummy_truth.json").read_text())["points_mm"]
+    out = tmp_path / "sx.csv"
+    code, _, err = taptune(capsys, "spindle", "--dummy", D01 / "dummy.toml", "--aa", D01 / "G_aa.csv", "--ab", D01 / "G_ab.csv",
+                           "--bb", D01 / "G_bb.csv", "--points", *points, "--out", out)
+    assert code == 0, err
+    got, truth = read_spindle(out), read_spindle(D01 / "spindle_x.csv")
+    for i, j in ((0, 0), (0, 1), (1, 1)):
+        assert np.median(relative_error(got.h[:, i, j], truth.h[:, i, j])) <= 0.01, (i, j)
+
+
+def test_spindle_bad_inputs_end_in_one_line(tmp_path, capsys):
+    (tmp_path / "dummy.toml").write_text(DUMMY)
+    a = tmp_path / "a.csv"
+    a.write_text("f_hz,re,im\n100,1e-8,-1e-9\n200,1e-8,-1e-9\n300,1e-8,-1e-9\n")
+    b = tmp_path / "b.csv"
+    b.write_text("f_hz,re,im\n100,1e-8,-1e-9\n250,1e-8,-1e-9\n300,1e-8,-1e-9\n")
+    base = ["spindle", "--dummy", tmp_path / "dummy.toml", "--points", 0, 60]
+    assert "differs from" in one_line_error(capsys, *base, "--aa", a, "--ab", b, "--bb", a, "--out", tmp_path / "s.csv")
+    assert "name the file .csv" in one_line_error(capsys, *base, "--aa", a, "--ab", a, "--bb", a, "--out", tmp_path / "s.uff")
+    assert "--smooth" in one_line_error(capsys, *base, "--aa", a, "--ab", a, "--bb", a, "--out", tmp_path / "s.csv",
+                                        "--smooth", "lots")
+    assert "missing.frf: no such file" in one_line_error(capsys, *base, "--aa", tmp_path / "missing.frf", "--ab", a, "--bb", a,
+                                                          "--out", tmp_path / "s.csv")
+    bad = tmp_path / "bad.frf"
+    bad.write_text("100\t1e-8\t-1e-9\n200\tabc\t-1e-9\n")
+    assert "bad.frf: line 2, column real: 'abc' is not a number" in one_line_error(
+        capsys, *base, "--aa", bad, "--ab", a, "--bb", a, "--out", tmp_path / "s.csv")
+    assert "no such file" in one_line_error(capsys, "spindle", "--dummy", tmp_path / "none.toml", "--points", 0, 60,
+                                            "--aa", a, "--ab", a, "--bb", a, "--out", tmp_path / "s.csv")
+    assert not (tmp_path / "s.csv").exists()
