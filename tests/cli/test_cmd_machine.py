@@ -334,3 +334,19 @@ def test_spindle_bad_inputs_end_in_one_line(tmp_path, capsys):
     assert "no such file" in one_line_error(capsys, "spindle", "--dummy", tmp_path / "none.toml", "--points", 0, 60,
                                             "--aa", a, "--ab", a, "--bb", a, "--out", tmp_path / "s.csv")
     assert not (tmp_path / "s.csv").exists()
+
+
+def test_toolpoint_contact_models_differ_as_physics_says(tmp_path, capsys):
+    """A rigidly tied tool is stiffer than one held by the identified compliant layer: its strongest
+    tool mode on the machine is higher (MODEL.md §10.4 comparison)."""
+    tops = {}
+    for contact in ("distributed", "rigid", "lumped"):
+        out = tmp_path / f"{contact}.json"
+        code, _, err = taptune(capsys, "toolpoint", *DEMO, "--freq", 2000, 6000, 4, "--contact", contact, "--json", out)
+        assert code == 0, err
+        pred = json.loads(out.read_text())["predictions"][0]
+        assert pred["contact"] == contact
+        g = complex_of(pred["x"])
+        tops[contact] = pred["frequency_hz"][int(np.argmax(np.abs(g)))]
+    assert tops["rigid"] > tops["distributed"]
+    assert tops["lumped"] != tops["distributed"]
