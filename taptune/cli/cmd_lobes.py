@@ -125,13 +125,13 @@ def run(args) -> int:
 
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.plot, "plot")):
         output_path(path, what)
-    ktc, krc, coefficients = cutting_coefficients(args)
-    freq, gxx, gyy, source, tool_diameter_mm, max_rpm, warnings = frf_input(args)
-    diameter = args.diameter if args.diameter is not None else tool_diameter_mm
-    if diameter is None:
-        raise InputError("--frf needs --diameter MM (the tool diameter)")
     if args.teeth < 1:
         raise InputError(f"--teeth must be >= 1, got {args.teeth}")
+    ktc, krc, coefficients = cutting_coefficients(args)
+    if args.frf and args.diameter is None:
+        raise InputError("--frf needs --diameter MM (the tool diameter)")
+    freq, gxx, gyy, source, tool_diameter_mm, max_rpm, warnings = frf_input(args)
+    diameter = args.diameter if args.diameter is not None else tool_diameter_mm
     rpm = rpm_grid(args, freq, gxx, gyy, args.teeth, max_rpm)
     lobes = stability_lobes(freq, gxx, gyy, teeth=args.teeth, ktc=ktc, krc=krc, diameter=diameter * 1e-3,
                             ae=args.ae * 1e-3, milling=args.milling, rpm=rpm)
