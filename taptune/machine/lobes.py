@@ -162,7 +162,23 @@ def _eigenvalues(phi_xx, phi_yy, a) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         lam1 = np.where(a0 != 0, q / a0, np.inf)
         lam2 = np.where(q != 0, 1.0 / q, np.inf)
-    return np.stack([lam1, lam2])
+    return _follow(np.stack([lam1, lam2]))
+
+
+def _follow(lam) -> np.ndarray:
+    """Label the two roots continuously along the scan, shape (2, n).
+
+    The sign choice above swaps the roots wherever Re(ā1·√disc) changes sign; a lobe
+    joining one root at one frequency to the other at the next would draw a false
+    segment across the speed axis. Each point keeps the pairing nearest (in 1/Λ, which
+    stays finite) to the previous point; the swaps accumulate as a parity.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(np.isfinite(lam), 1.0 / lam, 0.0)
+    same = np.abs(inv[0, 1:] - inv[0, :-1]) + np.abs(inv[1, 1:] - inv[1, :-1])
+    cross = np.abs(inv[0, 1:] - inv[1, :-1]) + np.abs(inv[1, 1:] - inv[0, :-1])
+    flip = np.concatenate([[False], np.cumsum(cross < same) % 2 == 1])
+    return np.where(flip[None, :], lam[::-1], lam)
 
 
 def _lower_envelope(grid, n, a, fc, best, chatter) -> bool:
