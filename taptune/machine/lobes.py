@@ -98,6 +98,8 @@ class Lobes:
     curves : tuple of (k, rpm ndarray, a_lim ndarray)
         Every lobe k (both roots) that reaches the grid, in chatter-frequency order over
         the scan (NaN/inf where a root gives no positive limit), for plots.
+    warnings : tuple of str
+        E.g. speeds that no lobe reaches because the FRF's band ends too early.
     """
 
     rpm: np.ndarray = field(repr=False)
@@ -106,6 +108,7 @@ class Lobes:
     a_crit: float = float("nan")
     pockets: tuple = ()
     curves: tuple = field(default=(), repr=False)
+    warnings: tuple = ()
 
     def to_dict(self) -> dict:
         """MACHINE.md's ``lobes`` JSON (mm, rpm, Hz); non-finite values are null."""
@@ -280,8 +283,15 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
     out_a = np.empty_like(best)
     out_c = np.empty_like(chatter)
     out_a[order], out_c[order] = best, chatter
+    warnings = []
+    gap = ~np.isfinite(best)
+    if gap.any():
+        warnings.append(
+            f"no lobe reaches {gap.sum()} of {len(grid)} speeds ({grid[gap].min():g}–{grid[gap].max():g} rpm): "
+            f"their chatter frequencies lie outside the FRF's band ({f[0]:g}–{f[-1]:g} Hz); the limit there is unknown"
+        )
     return Lobes(rpm=speeds, a_lim=out_a, chatter_hz=out_c, a_crit=a_crit, pockets=_pockets(grid, best),
-                 curves=tuple(curves))
+                 curves=tuple(curves), warnings=tuple(warnings))
 
 
 def _pockets(grid, a) -> tuple:

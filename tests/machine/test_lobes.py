@@ -38,6 +38,12 @@ def test_closed_form_slotting_single_mode():
     re = np.real(sdof(lobes.chatter_hz, k, zeta, 1000.0))
     assert np.median(np.abs(lobes.a_lim * (-n * krc * re / 2) - 1)) < 1e-4
     assert np.all(np.isfinite(lobes.a_lim)) and np.all(lobes.chatter_hz > 1000.0)  # chatter above f_n
+    assert lobes.warnings == ()
+    # Above ≈ 14,800 rpm the k = 0 lobe needs chatter frequencies beyond the 1,500 Hz band.
+    fast = stability_lobes(f, phi, np.zeros_like(phi), teeth=n, ktc=902e6, krc=krc, diameter=12 * MM, ae=12 * MM,
+                           milling="down", rpm=np.arange(14000.0, 16000.0, 10.0))
+    assert not np.all(np.isfinite(fast.a_lim)) and "outside the FRF's band" in fast.warnings[0]
+    assert None in fast.to_dict()["a_lim_mm"]
 
 
 def test_directional_factors():
