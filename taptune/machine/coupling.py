@@ -127,6 +127,8 @@ def _spindle_pair(spindle) -> tuple[SpindleReceptance, SpindleReceptance]:
     if not isinstance(x, SpindleReceptance):
         raise InputError("machine: the spindle needs an x-direction receptance")
     y = spindle.get("y") or x
+    if not isinstance(y, SpindleReceptance):
+        raise InputError("machine: the y-direction spindle must be a receptance (or absent: y = x)")
     return x, y
 
 

@@ -26,7 +26,7 @@ Signatures::
     spindle_from_dummy(dummy, point_a_m, point_b_m, freq_hz, g_aa, g_ab, g_bb, *,
                        model_options=None, smooth="auto", source="dummy", return_fit=False)
         -> (SpindleReceptance, warnings[, DummyFit])
-    inverse_rcsa(h, g_aa, g_ab, g_bb) -> (x (n,2,2), cond (n,))       # h: (n, 6, 6) at [a, b, c]
+    inverse_rcsa(h, g_aa, g_ab, g_bb) -> (x (n,2,2), cond (n,), systems (n,3,3))  # h at [w_a, w_b, w_c, θ_c]
     smooth_frf(freq_hz, g, half_width) -> ndarray
     frf_noise(frfs) -> float                                            # relative noise estimate
 """
