@@ -29,7 +29,8 @@ import numpy as np
 
 from taptune.errors import InputError
 from taptune.model.fe import FEModel
-from taptune.model.modes import TWO_PI, BandedLU, _elastic, rigid_body_modes
+from taptune.model.eigen import TWO_PI, BandedLU, rigid_body_modes
+from taptune.model.eigen import elastic_solution as _elastic  # renamed on main (was modes._elastic)
 from taptune.model.params import HolderParams
 
 #: Elastic modes up to this multiple of the highest requested frequency enter the modal
