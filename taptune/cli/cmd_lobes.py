@@ -10,17 +10,10 @@ from __future__ import annotations
 import sys
 
 from taptune.cli.cmd_toolpoint import add_holder_args, add_model_args
-
-DEFAULT_MIN_RPM = 500.0
-DEFAULT_STEP_RPM = 10.0
-# Without a machine top speed, the diagram reaches a little beyond the k = 0 lobe's peak
-# 60 f_c / N, which is the highest pocket a cut can have.
-TOP_POCKET_MARGIN = 1.2
+from taptune.cli.cut import add_cut_args, cutting_coefficients, rpm_grid, tool_diameter_mm
 
 
 def add_parser(sub, name, help_text):
-    from taptune.machine.materials import MATERIALS
-
     p = sub.add_parser(name, help=help_text, description=(
         "Stability lobes of a milling cut, zero-order approximation: the largest axial depth of cut "
         "without chatter at each spindle speed. The tool-point FRF comes from the holder on the "
@@ -32,59 +25,11 @@ def add_parser(sub, name, help_text):
     p.add_argument("--frf", metavar="CSV", help="measured tool-point FRF: f_hz,xx_re,xx_im[,yy_re,yy_im] in m/N "
                                                 "(y = x when the yy columns are absent)")
     cut = p.add_argument_group("the cut")
-    cut.add_argument("--teeth", type=int, required=True, metavar="N", help="number of teeth (flutes)")
-    cut.add_argument("--ktc", type=float, metavar="MPA", help="tangential cutting-force coefficient K_tc [MPa = N/mm²]")
-    cut.add_argument("--krc", type=float, metavar="MPA", help="radial cutting-force coefficient K_rc [MPa]")
-    cut.add_argument("--material", metavar="NAME", help=f"work material instead of --ktc/--krc: {', '.join(MATERIALS)}")
-    cut.add_argument("--diameter", type=float, metavar="MM", help="tool diameter [mm] (default: the assembly's "
-                                                                   "flute diameter; required with --frf)")
-    cut.add_argument("--ae", type=float, required=True, metavar="MM", help="radial depth of cut [mm]; = diameter is slotting")
-    cut.add_argument("--milling", choices=("up", "down"), required=True, help="up- or down-milling")
-    p.add_argument("--rpm", type=float, nargs=3, metavar=("MIN", "MAX", "STEP"),
-                   help=f"spindle-speed grid [rpm], MAX included when on the grid (default: {DEFAULT_MIN_RPM:g} rpm "
-                        f"to the machine's max_rpm, or just past the highest pocket, step {DEFAULT_STEP_RPM:g})")
+    add_cut_args(p, cut, required=True, diameter_note="; required with --frf")
     p.add_argument("--json", metavar="OUT", help="write the lobes as JSON ('-' for stdout)")
     p.add_argument("--csv", metavar="OUT", help="write rpm,a_lim_mm,chatter_hz")
     p.add_argument("--plot", metavar="PNG", help="write the lobe diagram")
     return p
-
-
-def cutting_coefficients(args) -> tuple[float, float, str]:
-    """(K_tc, K_rc [N/m²], description) from --material or --ktc/--krc."""
-    from taptune.errors import InputError
-
-    if args.material:
-        if args.ktc is not None or args.krc is not None:
-            raise InputError("give either --material or --ktc and --krc, not both")
-        from taptune.machine.materials import cutting_coefficients as lookup
-
-        c = lookup(args.material)
-        return c.ktc, c.krc, f"{c.name} (K_tc {c.ktc / 1e6:g} MPa, K_rc {c.krc / 1e6:g} MPa)"
-    if args.ktc is None or args.krc is None:
-        raise InputError("give the cutting coefficients: --ktc MPA and --krc MPA, or --material NAME")
-    return args.ktc * 1e6, args.krc * 1e6, f"K_tc {args.ktc:g} MPa, K_rc {args.krc:g} MPa"
-
-
-def rpm_grid(args, freq_hz, gxx, gyy, teeth: int, max_rpm: float | None):
-    """``--rpm`` or the default grid: from 500 rpm to the machine's top speed, else just past
-    the highest pocket 60 f/N of the strongest mode."""
-    import numpy as np
-
-    from taptune.errors import InputError
-    from taptune.library.exchange import frequency_grid as uniform_grid
-    from taptune.machine import dominant_modes
-
-    if args.rpm:
-        lo, hi, step = args.rpm
-        try:
-            return uniform_grid(lo, hi, step)
-        except InputError:
-            raise InputError(f"--rpm {lo:g} {hi:g} {step:g}: needs 0 < MIN < MAX and STEP > 0 (rpm)") from None
-    if max_rpm is None:
-        modes = dominant_modes(freq_hz, gxx, "x") + dominant_modes(freq_hz, gyy, "y")
-        f_top = max(modes, key=lambda m: m.magnitude).hz if modes else float(freq_hz[np.argmax(np.abs(gxx))])
-        max_rpm = 1000.0 * np.ceil(TOP_POCKET_MARGIN * 60.0 * f_top / teeth / 1000.0)
-    return uniform_grid(min(DEFAULT_MIN_RPM, 0.5 * max_rpm), max_rpm, DEFAULT_STEP_RPM)
 
 
 def frf_input(args):
@@ -112,7 +57,7 @@ def frf_input(args):
     frf, used = frfs[0], assemblies[0]
     warnings += [w for w in used.warnings if w not in warnings]
     tool = used.tool
-    diameter_mm = (tool.flute_diameter or tool.segments[-1].od) * 1e3
+    diameter_mm = tool_diameter_mm(used)
     what = (f"{holder.name} with {tool.name} at {used.stickout * 1e3:g} mm on {machine.name} "
             f"(contact {args.contact})")
     return frf.freq_hz, frf.xx, frf.yy, what, diameter_mm, machine.max_rpm, warnings
@@ -132,7 +77,7 @@ def run(args) -> int:
         raise InputError("--frf needs --diameter MM (the tool diameter)")
     freq, gxx, gyy, source, tool_diameter_mm, max_rpm, warnings = frf_input(args)
     diameter = args.diameter if args.diameter is not None else tool_diameter_mm
-    rpm = rpm_grid(args, freq, gxx, gyy, args.teeth, max_rpm)
+    rpm = rpm_grid(args.rpm, freq, gxx, gyy, args.teeth, max_rpm)
     lobes = stability_lobes(freq, gxx, gyy, teeth=args.teeth, ktc=ktc, krc=krc, diameter=diameter * 1e-3,
                             ae=args.ae * 1e-3, milling=args.milling, rpm=rpm)
     out = lobes.to_dict()
