@@ -1,4 +1,5 @@
-"""One job, in a worker process: analyse, identify, store in the library, write the result JSONs.
+"""One job, in a worker process: analyse, identify, store in the library, (with ``--machine``)
+the holder on the spindle, write the result JSONs.
 
 A bad recording never raises out of :func:`run_job`: every item gets a row, and an
 unexpected exception's traceback goes to ``errors.log``.
@@ -12,6 +13,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Sequence
 
+from taptune.batch.on_machine import MachinePart, failed_part, machine_part
 from taptune.batch.outputs import log_error, result_json
 from taptune.batch.records import BatchOptions, Item, Outcome, ProgressCallback, Row, first_three, one_line, rows_for
 from taptune.cli.common import write_json
@@ -60,19 +62,50 @@ def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCall
             save_identification(options.library, result, recordings, assemblies)
         seconds = time.perf_counter() - t0
         done = []  # rows join the outcome only when every file of the job is written
+        parts = []
         for k, item in enumerate(group):
             view = recording_view(result, k)
             data = result_json(view, item, recordings[k], analyses[k], group, result.objective)
+            part = _machine(result.params, id_options.model, item, options)
+            if part is not None:
+                data["machine"] = part.record
             write_json(data, str(item.json_path))
-            done.append(Row(str(item.path), item.holder, "ok", first_three(view.bending_measured_hz[0]),
-                            first_three(view.bending_model_hz[0]), view.objective, seconds, _warning_note(data)))
+            done.append(_ok_row(item, view, seconds, data, part))
+            parts.append(part)
     except InputError as err:
         return Outcome(tuple(rows + rows_for(group, "failed", one_line(err), time.perf_counter() - t0)))
     except Exception as err:  # noqa: BLE001 - reported as status "error", traceback to errors.log
         log_error(out_dir, group, err)
         return Outcome(tuple(rows + rows_for(group, "error", one_line(err), time.perf_counter() - t0)))
     pages = _pages(result, analyses, recordings, assemblies, id_options.model, out_dir) if options.keep_pages else ()
+    if pages and options.machine is not None:
+        pages = tuple(replace(page, machine=part.view) for page, part in zip(pages, parts))
     return Outcome(tuple(rows + done), pages)
+
+
+def _machine(params, model_options, item: Item, options: BatchOptions) -> MachinePart | None:
+    """The recording's machine part (None without --machine); a surprise fails only this part."""
+    setup = options.machine
+    if setup is None:
+        return None
+    try:
+        return machine_part(params, model_options, item.assembly, setup, item.json_path)
+    except Exception as err:  # noqa: BLE001 - the identification is done: keep it, log the traceback
+        log_error(Path(options.out_dir), [item], err)
+        return failed_part({"machine": setup.machine.name, "file": setup.path, "contact": setup.contact},
+                           f"On {setup.machine.name}", one_line(err))
+
+
+def _ok_row(item: Item, view, seconds: float, data: dict, part: MachinePart | None) -> Row:
+    """The summary row of an identified recording, with the machine part's numbers or why they are missing."""
+    note = _warning_note(data)
+    if part is not None and part.error:
+        note = "; ".join(filter(None, [f"machine part failed: {part.error}", note]))
+    best = part.best_pocket if part is not None and part.best_pocket else (None, None)
+    return Row(str(item.path), item.holder, "ok", first_three(view.bending_measured_hz[0]),
+               first_three(view.bending_model_hz[0]), view.objective, seconds, note,
+               a_crit_mm=part.a_crit_mm if part is not None else None,
+               best_pocket_rpm=best[0], best_pocket_a_lim_mm=best[1])
 
 
 def _pages(result, analyses, recordings, assemblies, model_options, out_dir: Path) -> tuple:

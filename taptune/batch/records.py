@@ -21,7 +21,9 @@ SUMMARY_HEADER = (
     "file", "holder", "status",
     "f1_measured_hz", "f2_measured_hz", "f3_measured_hz",
     "f1_model_hz", "f2_model_hz", "f3_model_hz",
-    "objective", "seconds", "message",
+    "objective", "seconds",
+    "a_crit_mm", "best_pocket_rpm", "best_pocket_a_lim_mm",  # with --machine; empty otherwise
+    "message",
 )
 # Statuses that make the batch exit 1.
 FAILED_STATUSES = ("failed", "error", "cancelled")
@@ -37,6 +39,9 @@ class Row:
     ``status`` is ``ok``, ``skipped`` (identified before with the same content),
     ``failed`` (bad input), ``error`` (unexpected failure) or ``cancelled``.
     Frequencies [Hz] are per bending mode 1–3 (None where not measured or not run).
+    With ``--machine``: the critical depth of cut and the best pocket (speed [rpm], depth
+    [mm]) of the lobes on the machine; None without it or when the machine part failed
+    (``message`` says why).
     """
 
     file: str
@@ -47,6 +52,9 @@ class Row:
     objective: float | None = None
     seconds: float | None = None
     message: str = ""
+    a_crit_mm: float | None = None
+    best_pocket_rpm: float | None = None
+    best_pocket_a_lim_mm: float | None = None
 
     @property
     def failed(self) -> bool:
@@ -59,7 +67,9 @@ class Row:
             self.file, self.holder, self.status,
             *(_cell(f, 2) for f in first_three(self.measured_hz)),
             *(_cell(f, 2) for f in first_three(self.model_hz)),
-            _cell(self.objective, 6), _cell(self.seconds, 2), self.message,
+            _cell(self.objective, 6), _cell(self.seconds, 2),
+            _cell(self.a_crit_mm, 4), _cell(self.best_pocket_rpm, 0), _cell(self.best_pocket_a_lim_mm, 4),
+            self.message,
         ]
 
 
@@ -105,6 +115,23 @@ class Item:
 
 
 @dataclass(frozen=True)
+class MachineSetup:
+    """``--machine`` and the cut: what each job computes after its identification.
+
+    ``machine`` is the loaded :class:`~taptune.io.machine.Machine`, ``freq_hz`` the
+    tool-point FRF grid [Hz] inside its spindle files' band, ``cut`` a
+    :class:`~taptune.cli.cut.CutOptions` (``diameter_mm`` None: each tool's own),
+    ``contact`` the tool–holder joint of the model.
+    """
+
+    machine: object
+    freq_hz: object
+    cut: object
+    contact: str = "distributed"
+    path: str = ""
+
+
+@dataclass(frozen=True)
 class BatchOptions:
     """How to run a batch. ``jobs`` only changes the speed, never a result."""
 
@@ -120,6 +147,7 @@ class BatchOptions:
     polish_evaluations: int | None = None
     keep_pages: bool = False  # return what a PDF report needs (BatchResult.pages)
     timeout_s: float | None = None  # a job running longer is stopped and marked "error"
+    machine: MachineSetup | None = None  # tool-point FRF and lobes of each identified holder
 
     def identify_options(self):
         """IdentifyOptions for one worker: one process each (a pool worker may not fork a pool)."""

@@ -1,9 +1,12 @@
-"""``taptune batch PATH... [--assembly FILE] [--jobs N] [--out DIR] [--library PATH] [--force] [--joint] [--report PDF] [--seed N] [--no-save] [--timeout S]``."""
+"""``taptune batch PATH... [--assembly FILE] [--jobs N] [--out DIR] [--library PATH] [--force] [--joint] [--report PDF] [--seed N] [--no-save] [--timeout S] [--machine MACHINE.toml --teeth N ...]``."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+
+from taptune.cli.cmd_toolpoint import add_model_args
+from taptune.cli.cut import add_cut_args
 
 
 def add_parser(sub, name, help_text):
@@ -13,7 +16,10 @@ def add_parser(sub, name, help_text):
         "stem beside it (name_tap.wav may use name.toml), else an assembly.toml in its folder. Writes one result JSON per recording "
         "(as 'taptune identify --json') and summary.csv into --out, and stores the holders in the "
         "library. One bad file never stops the batch; the exit status is 1 if any file failed. "
-        "Recordings identified before with the same content (sha256) are skipped unless --force."))
+        "Recordings identified before with the same content (sha256) are skipped unless --force. "
+        "With --machine and the cut, each identified holder is also put on the machine: its tool-point "
+        "FRF and stability lobes go into the result JSON (lobes in a .lobes.csv beside it), the report "
+        "pages and summary.csv (critical depth, best pocket)."))
     p.add_argument("paths", nargs="+", metavar="PATH", help="recordings or folders of recordings")
     p.add_argument("--assembly", metavar="FILE", help="one assembly TOML for every recording")
     p.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
@@ -28,6 +34,11 @@ def add_parser(sub, name, help_text):
     p.add_argument("--no-save", action="store_true", help="do not store the holders in the library")
     p.add_argument("--timeout", type=float, default=None, metavar="S",
                    help="stop a recording's identification after S seconds and mark it 'error' (default: no limit)")
+    on_machine = p.add_argument_group(
+        "on the machine", "with --machine, after each identification: the tool-point FRF of the recording's "
+                          "assembly on the spindle and the stability lobes of the cut (as 'taptune lobes')")
+    add_model_args(on_machine)
+    add_cut_args(p, on_machine, required=False, diameter_note=" of each recording")
     # Optimiser budget: for tests and quick looks, not for real identifications.
     p.add_argument("--population", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--generations", type=int, default=None, help=argparse.SUPPRESS)
@@ -45,7 +56,28 @@ def _check(args) -> None:
         value = getattr(args, flag)
         if value is not None and value < 1:
             raise InputError(f"--{flag.replace('_', '-')} must be at least 1, got {value}")
+    setup = machine_setup(args)  # before anything is written
     output_path(args.report, "report")
+    return setup
+
+
+def machine_setup(args):
+    """The checked ``--machine`` and cut as a :class:`taptune.batch.records.MachineSetup` (None without --machine)."""
+    from taptune.cli.cut import cut_options, given_cut_flags
+    from taptune.errors import InputError
+
+    if not args.machine:
+        extra = given_cut_flags(args) + ["--freq"] * bool(args.freq) + ["--contact"] * (args.contact != "distributed")
+        if extra:
+            raise InputError(f"{', '.join(extra)} describe the machine part: give --machine MACHINE_TOML too")
+        return None
+    from taptune.batch.records import MachineSetup
+    from taptune.cli.cmd_toolpoint import frequency_grid
+    from taptune.io.machine import load_machine
+
+    cut = cut_options(args)
+    machine = load_machine(args.machine)
+    return MachineSetup(machine, frequency_grid(args, machine), cut, args.contact or "distributed", args.machine)
 
 
 def format_row(row) -> str:
@@ -80,12 +112,12 @@ def run(args) -> int:
     from taptune.batch import BatchOptions, run_batch
     from taptune.cli.common import ProgressBar
 
-    _check(args)
+    machine = _check(args)
     options = BatchOptions(
         out_dir=Path(args.out), library=args.library, jobs=args.jobs, seed=args.seed, force=args.force,
         joint=args.joint, save=not args.no_save, population=args.population, generations=args.generations,
         polish_evaluations=args.polish_evaluations, timeout_s=args.timeout,
-        keep_pages=bool(args.report),
+        keep_pages=bool(args.report), machine=machine,
     )
     bar = ProgressBar("batch")
 

@@ -56,6 +56,7 @@ class ReportPage:
     predictions: tuple[PredictionRow, ...]
     joint_files: tuple[str, ...] = ()
     joint_objective: float | None = None
+    machine: object | None = None  # report.machine_page.MachineView (batch --machine): a row of FRF and lobes
 
 
 def recording_view(result, index: int):
@@ -219,7 +220,7 @@ def draw_page(fig, page: ReportPage) -> None:
 
     fig.suptitle(f"{page.holder} — {Path(page.file).name} — stick-out {page.stickout_mm:.1f} mm",
                  fontsize=12, fontweight="bold")
-    left, right = fig.subfigures(1, 2, width_ratios=[1.2, 1], wspace=0.02)
+    left, right = _machine_row(fig, page).subfigures(1, 2, width_ratios=[1.2, 1], wspace=0.02)
     draw_identification(left, page.result, [page.analysis], title="")
     left.suptitle("")  # the parameters are in the table on the right, with their spread
     axes = right.subplots(3, 1, gridspec_kw={"height_ratios": [1.15, 0.95, 1.3]})
@@ -232,6 +233,17 @@ def draw_page(fig, page: ReportPage) -> None:
     axes[2].set_title("Provenance", fontsize=10, loc="left", fontweight="bold")
     axes[2].text(0.0, 1.0, provenance_text(page), va="top", ha="left", family="monospace", fontsize=7.5,
                  transform=axes[2].transAxes)
+
+
+def _machine_row(fig, page: ReportPage):
+    """Draw the machine row (tool-point FRF, lobes) at the bottom if the page has one; the figure left above."""
+    if page.machine is None:
+        return fig
+    from taptune.report.machine_page import draw_machine
+
+    top, bottom = fig.subfigures(2, 1, height_ratios=[1.9, 1], hspace=0.02)
+    draw_machine(bottom, page.machine)
+    return top
 
 
 def draw_summary_page(fig, rows, first: int, title: str) -> None:

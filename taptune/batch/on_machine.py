@@ -1,0 +1,109 @@
+"""The machine part of a job (``taptune batch --machine``): the identified holder on the spindle.
+
+After the identification, in the worker: the tool-point FRF (x, y) of the recording's
+assembly with the identified parameters, coupled to the machine's spindle (as ``taptune
+toolpoint``), and the stability lobes of the cut (as ``taptune lobes``). The lobes go to
+a CSV beside the result JSON; the JSON gets a moderate ``machine`` object (modes,
+critical depth, best pockets, the CSV's name). A failure here (e.g. a tool reaching
+behind the coupling plane) fails only this part: the identification stays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from taptune.batch.records import MachineSetup, one_line
+from taptune.cli.cmd_lobes import write_lobes_csv
+from taptune.cli.cut import rpm_grid, tool_diameter_mm
+from taptune.errors import InputError
+from taptune.machine import stability_lobes, toolpoint_frf
+from taptune.report.machine_page import MachineView
+
+JSON_POCKETS = 10  # the best pockets in the JSON; every speed is in the CSV
+LOBES_SUFFIX = ".lobes.csv"
+
+
+@dataclass(frozen=True)
+class MachinePart:
+    """The machine part of one recording: the JSON object, the summary numbers, the report view.
+
+    ``error`` is the one-line reason when it failed (then only ``record`` and ``view`` say so).
+    """
+
+    record: dict
+    a_crit_mm: float | None = None
+    best_pocket: tuple[float, float] | None = None  # (rpm, a_lim [mm])
+    view: MachineView | None = None
+    error: str = ""
+
+
+def lobes_csv_path(json_path: Path) -> Path:
+    """``tap.json`` → ``tap.lobes.csv`` beside it."""
+    return json_path.with_name(json_path.stem + LOBES_SUFFIX)
+
+
+def machine_part(params, model_options, assembly, setup: MachineSetup, json_path: Path) -> MachinePart:
+    """Tool-point FRF and lobes of ``assembly`` with the identified ``params`` on ``setup.machine``.
+
+    Writes the lobes CSV beside ``json_path``. Bad input (a tool behind the coupling
+    plane, an ae wider than the tool…) gives a failed part, never an exception.
+    """
+    machine, cut = setup.machine, setup.cut
+    base = {"machine": machine.name, "file": setup.path, "contact": setup.contact}
+    title = f"On {machine.name}"
+    try:
+        frf = toolpoint_frf(assembly, params, {"x": machine.x, "y": machine.y}, setup.freq_hz, model_options,
+                            contact=setup.contact)
+        diameter_mm = cut.diameter_mm if cut.diameter_mm is not None else tool_diameter_mm(assembly)
+        rpm = rpm_grid(cut.rpm, frf.freq_hz, frf.xx, frf.yy, cut.teeth, machine.max_rpm)
+        lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc, krc=cut.krc,
+                                diameter=diameter_mm * 1e-3, ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm)
+    except InputError as err:
+        return failed_part(base, title, one_line(err))
+    out = lobes.to_dict()
+    csv_path = lobes_csv_path(json_path)
+    write_lobes_csv(str(csv_path), out)
+    record = {
+        **base,
+        "stickout_mm": round(frf.stickout * 1e3, 6),
+        "coupling_plane_mm": round(frf.coupling_plane * 1e3, 6),
+        "frequency_hz": [float(frf.freq_hz[0]), float(frf.freq_hz[-1])],
+        "modes": [{**m.to_dict(), "magnitude_um_per_n": float(f"{m.magnitude * 1e6:.5g}")} for m in frf.modes],
+        "cut": cut.to_dict(diameter_mm),
+        "rpm": [out["rpm"][0], out["rpm"][-1]],
+        "a_crit_mm": out["a_crit_mm"],
+        "pockets": out["pockets"][:JSON_POCKETS],
+        "lobes_csv": csv_path.name,
+        "warnings": _warnings(assembly, machine, lobes),
+    }
+    best = (out["pockets"][0]["rpm"], out["pockets"][0]["a_lim_mm"]) if out["pockets"] else None
+    view = MachineView(
+        title=(f"On {machine.name}: tool point (contact {setup.contact}) and lobes — "
+               f"critical depth {out['a_crit_mm']:.3g} mm"),
+        freq_hz=frf.freq_hz, xx=frf.xx, yy=frf.yy,
+        modes=tuple((m.hz, m.direction) for m in frf.modes),
+        rpm=lobes.rpm, a_lim_mm=np.where(np.isfinite(lobes.a_lim), lobes.a_lim * 1e3, np.nan),
+        a_crit_mm=out["a_crit_mm"], pockets=tuple(out["pockets"][:JSON_POCKETS]), cut=cut.describe(diameter_mm),
+    )
+    return MachinePart(record, out["a_crit_mm"], best, view)
+
+
+def failed_part(base: dict, title: str, message: str) -> MachinePart:
+    """A machine part that could not be computed: the reason in the JSON, the summary and the page."""
+    return MachinePart({**base, "error": message}, view=MachineView(title=title, error=message), error=message)
+
+
+def _warnings(assembly, machine, lobes) -> list[str]:
+    def plain(name: str) -> str:
+        return "".join(ch for ch in name.upper() if ch.isalnum())
+
+    warnings = list(lobes.warnings)
+    if plain(machine.interface) != plain(assembly.holder.interface):
+        warnings.append(f"the machine's interface {machine.interface!r} differs from the holder's "
+                        f"{assembly.holder.interface!r}")
+    if machine.y_from_x:
+        warnings.append("the machine file has no [spindle] y; the x receptance is used for y")
+    return warnings
