@@ -278,3 +278,94 @@ def test_a_report_page_that_cannot_be_made_leaves_the_identification_ok(tmp_path
     result = run_batch([tmp_path], tiny(tmp_path, keep_pages=True))
     assert [r.status for r in result.rows] == ["ok"] and result.pages == ()
     assert "no page today" in (tmp_path / "out" / "errors.log").read_text()
+
+
+# ----------------------------------------------------------------------------- on the machine (--machine)
+
+MACHINE_TOML = Path(__file__).resolve().parents[1] / "recordings" / "machine" / "machine.toml"
+CUT = dict(teeth=4, material="al6082", ktc=None, krc=None, diameter=None, ae=4.0, milling="down", rpm=None)
+
+
+def machine_setup_for_tests(**cut):
+    """The MachineSetup ``taptune batch --machine recordings/machine/machine.toml --teeth 4 ...`` builds."""
+    from types import SimpleNamespace
+
+    from taptune.cli.cmd_batch import machine_setup
+
+    return machine_setup(SimpleNamespace(machine=str(MACHINE_TOML), freq=None, contact="distributed", **{**CUT, **cut}))
+
+
+@pytest.fixture(scope="module")
+def machine_batch(tmp_path_factory):
+    """Two good recordings and one whose holder's coupling plane (gauge_length 30 mm) lies in front of the tool's shank end."""
+    folder = tmp_path_factory.mktemp("machine")
+    write_case(folder, "one", "ER32 one", stickout_mm=50.0, seed=0)
+    write_case(folder, "two", "ER32 two", stickout_mm=56.0, seed=1)
+    behind = write_case(folder, "behind", "ER32 behind", stickout_mm=53.5, seed=2)
+    toml = behind.with_suffix(".toml")
+    toml.write_text(toml.read_text().replace("clamp_length = 40.0", "clamp_length = 40.0\ngauge_length = 30.0"))
+    out = tmp_path_factory.mktemp("machine_out")
+    options = BatchOptions(out_dir=out, save=False, jobs=2, keep_pages=True, machine=machine_setup_for_tests(), **TINY)
+    return folder, out, run_batch([folder], options)
+
+
+def test_machine_batch_fills_the_summary_with_the_critical_depth_and_the_best_pocket(machine_batch):
+    folder, out, result = machine_batch
+    rows = {Path(r["file"]).stem: r for r in read_summary(out / "summary.csv")}
+    for stem in ("one", "two"):
+        row = rows[stem]
+        a_crit, rpm, a_best = (float(row[k]) for k in ("a_crit_mm", "best_pocket_rpm", "best_pocket_a_lim_mm"))
+        # A 16 mm end mill on an HSK-A63 spindle in aluminium: critical depth of a few mm,
+        # pockets several times deeper, inside the 500–24,000 rpm diagram of the machine.
+        assert 0.2 < a_crit < 20 and a_best > 2 * a_crit and 500 <= rpm <= 24000, row
+        doc = json.loads((out / f"{stem}.json").read_text())
+        machine = doc["machine"]
+        assert machine["a_crit_mm"] == pytest.approx(a_crit, rel=1e-3)
+        assert machine["cut"]["diameter_mm"] == 16.0  # the tool's flute diameter from the assembly
+        assert machine["pockets"][0]["rpm"] == pytest.approx(rpm, abs=0.5)
+        assert len(machine["pockets"]) <= 10 and "a_lim_mm" not in machine  # moderate JSON: the curve is in the CSV
+        lines = (out / machine["lobes_csv"]).read_text().splitlines()
+        assert lines[0] == "rpm,a_lim_mm,chatter_hz"
+        a_lim = [float(line.split(",")[1]) for line in lines[1:] if line.split(",")[1]]
+        assert min(a_lim) == pytest.approx(a_crit, rel=1e-3)  # the critical depth is the lowest limit
+        assert max(a_lim) == pytest.approx(a_best, rel=1e-3)  # the best pocket is the highest peak
+        # The tool point on the spindle is softer than nothing: its strongest mode is a real peak.
+        assert machine["modes"][0]["magnitude_um_per_n"] > 0.05 and 500 < machine["modes"][0]["hz"] < 15000
+
+
+def test_a_machine_failure_keeps_the_identification_and_says_why(machine_batch):
+    folder, out, result = machine_batch
+    row = {Path(r.file).stem: r for r in result.rows}["behind"]
+    assert row.status == "ok" and row.model_hz[0] is not None  # identified all the same
+    assert row.message.startswith("machine part failed:") and "coupling plane" in row.message, row.message
+    assert (row.a_crit_mm, row.best_pocket_rpm) == (None, None)
+    doc = json.loads((out / "behind.json").read_text())
+    assert "coupling plane" in doc["machine"]["error"] and doc["params"]
+    assert result.exit_status == 0  # the identifications are all done
+
+
+def test_machine_batch_report_pages_carry_the_frf_and_the_lobes(machine_batch):
+    folder, out, result = machine_batch
+    views = {Path(p.file).stem: p.machine for p in result.pages}
+    assert set(views) == {"one", "two", "behind"}
+    assert views["behind"].error and not views["one"].error
+    one = views["one"]
+    assert len(one.freq_hz) == len(one.xx) == len(one.yy) > 1000 and len(one.rpm) == len(one.a_lim_mm) > 100
+    assert one.a_crit_mm == pytest.approx(result.rows[[Path(r.file).stem for r in result.rows].index("one")].a_crit_mm)
+
+
+def test_a_rerun_on_the_same_machine_skips_and_keeps_the_machine_numbers(machine_batch, tmp_path):
+    import shutil
+
+    folder, first_out, first = machine_batch
+    out = tmp_path / "out"
+    shutil.copytree(first_out, out)  # the other tests keep reading the first run's files
+    again = run_batch([folder / "one.wav"], BatchOptions(out_dir=out, save=False, jobs=1, machine=machine_setup_for_tests(),
+                                                        **TINY))
+    (row,) = again.rows
+    assert row.status == "skipped" and row.a_crit_mm == pytest.approx(
+        next(r.a_crit_mm for r in first.rows if Path(r.file).stem == "one"))
+    other_cut = run_batch([folder / "one.wav"], BatchOptions(out_dir=out, save=False, jobs=1,
+                                                            machine=machine_setup_for_tests(ae=2.0), **TINY))
+    (row,) = other_cut.rows
+    assert row.status == "skipped" and row.a_crit_mm is None and "machine part not run" in row.message

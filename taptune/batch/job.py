@@ -13,7 +13,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Sequence
 
-from taptune.batch.on_machine import MachinePart, failed_part, machine_part
+from taptune.batch.on_machine import MACHINE_FAILED, MachinePart, failed_part, machine_part
 from taptune.batch.outputs import log_error, result_json
 from taptune.batch.records import BatchOptions, Item, Outcome, ProgressCallback, Row, first_three, one_line, rows_for
 from taptune.cli.common import write_json
@@ -100,7 +100,7 @@ def _ok_row(item: Item, view, seconds: float, data: dict, part: MachinePart | No
     """The summary row of an identified recording, with the machine part's numbers or why they are missing."""
     note = _warning_note(data)
     if part is not None and part.error:
-        note = "; ".join(filter(None, [f"machine part failed: {part.error}", note]))
+        note = "; ".join(filter(None, [f"{MACHINE_FAILED} {part.error}", note]))
     best = part.best_pocket if part is not None and part.best_pocket else (None, None)
     return Row(str(item.path), item.holder, "ok", first_three(view.bending_measured_hz[0]),
                first_three(view.bending_model_hz[0]), view.objective, seconds, note,

@@ -24,6 +24,7 @@ from taptune.report.machine_page import MachineView
 
 JSON_POCKETS = 10  # the best pockets in the JSON; every speed is in the CSV
 LOBES_SUFFIX = ".lobes.csv"
+MACHINE_FAILED = "machine part failed:"  # how a summary message starts when only the machine part failed
 
 
 @dataclass(frozen=True)
@@ -107,3 +108,22 @@ def _warnings(assembly, machine, lobes) -> list[str]:
     if machine.y_from_x:
         warnings.append("the machine file has no [spindle] y; the x receptance is used for y")
     return warnings
+
+
+def skipped_note(row, data: dict | None, setup: MachineSetup | None, assembly):
+    """A skipped row with the machine numbers of its previous result JSON ``data`` when they were
+    computed on the same machine file with the same cut and contact; else a note that they are missing."""
+    if setup is None:
+        return row
+    from dataclasses import replace
+
+    previous = (data or {}).get("machine")
+    diameter_mm = setup.cut.diameter_mm if setup.cut.diameter_mm is not None else tool_diameter_mm(assembly)
+    same = (isinstance(previous, dict) and "error" not in previous and previous.get("file") == setup.path
+            and previous.get("contact") == setup.contact and previous.get("cut") == setup.cut.to_dict(diameter_mm))
+    if not same:
+        return replace(row, message=f"{row.message}; machine part not run for a recording identified before "
+                                    "(--force to identify it again with --machine)")
+    pockets = previous.get("pockets") or [{}]
+    return replace(row, a_crit_mm=previous.get("a_crit_mm"), best_pocket_rpm=pockets[0].get("rpm"),
+                   best_pocket_a_lim_mm=pockets[0].get("a_lim_mm"))

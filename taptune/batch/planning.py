@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
+from taptune.batch.on_machine import skipped_note
 from taptune.batch.records import AUDIO_SUFFIXES, BatchOptions, Item, Row, first_three, one_line
 from taptune.errors import InputError
 from taptune.io.assembly import load_assembly
@@ -101,8 +102,9 @@ def _read_json(path: Path) -> dict | None:
     return data if isinstance(data, dict) else None
 
 
-def _skip_from_json(item: Item, group_hashes: frozenset[str]) -> Row | None:
-    """A skipped row if ``item``'s result JSON holds a result for the same content."""
+def _skip_from_json(item: Item, group_hashes: frozenset[str], machine=None) -> Row | None:
+    """A skipped row if ``item``'s result JSON holds a result for the same content
+    (with its machine numbers when ``machine``, the batch's MachineSetup, is what made them)."""
     data = _read_json(item.json_path)
     if data is None or data.get("sha256") != item.sha256 or data.get("assembly_sha256") != item.assembly_sha256:
         return None
@@ -116,11 +118,12 @@ def _skip_from_json(item: Item, group_hashes: frozenset[str]) -> Row | None:
         objective = data.get("objective")
     except TypeError:
         return None
-    return Row(str(item.path), item.holder, "skipped", measured, model, objective, None,
-               f"identified before (same sha256 {item.sha256[:12]}; {item.json_path.name})")
+    row = Row(str(item.path), item.holder, "skipped", measured, model, objective, None,
+              f"identified before (same sha256 {item.sha256[:12]}; {item.json_path.name})")
+    return skipped_note(row, data, machine, item.assembly)
 
 
-def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str]) -> Row | None:
+def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str], machine=None) -> Row | None:
     """A skipped row if the library's provenance holds this recording with this tool and stick-out.
 
     The recording must have been fitted in the same company: alone for a single fit, with
@@ -138,10 +141,10 @@ def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str]) 
     for record in reversed(mine):
         together = {r.sha256 for r in entry.identifications if r.objective == record.objective}
         if together == group_hashes:
-            return Row(str(item.path), item.holder, "skipped", first_three(record.bending_measured_hz),
-                       first_three(record.bending_model_hz),
-                       record.objective, None,
-                       f"identified before (same sha256 {item.sha256[:12]} in the library, {record.date})")
+            row = Row(str(item.path), item.holder, "skipped", first_three(record.bending_measured_hz),
+                      first_three(record.bending_model_hz), record.objective, None,
+                      f"identified before (same sha256 {item.sha256[:12]} in the library, {record.date})")
+            return skipped_note(row, None, machine, item.assembly)
     return None
 
 
@@ -226,7 +229,8 @@ def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: st
     for group in _group(items, options.joint):
         hashes = frozenset(i.sha256 for i in group)
         skipped = [] if options.force else [
-            _skip_from_json(i, hashes) or (_skip_from_library(i, entries, hashes) if entries else None) for i in group
+            _skip_from_json(i, hashes, options.machine)
+            or (_skip_from_library(i, entries, hashes, options.machine) if entries else None) for i in group
         ]
         if skipped and all(skipped):
             rows += skipped

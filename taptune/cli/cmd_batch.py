@@ -77,7 +77,10 @@ def machine_setup(args):
 
     cut = cut_options(args)
     machine = load_machine(args.machine)
-    return MachineSetup(machine, frequency_grid(args, machine), cut, args.contact or "distributed", args.machine)
+    from pathlib import Path
+
+    path = str(Path(args.machine).resolve())  # a rerun from another folder still recognises its results
+    return MachineSetup(machine, frequency_grid(args, machine), cut, args.contact, path)
 
 
 def format_row(row) -> str:
@@ -104,6 +107,13 @@ def print_result(result, out_dir, stream=None) -> None:
         print(f"{len(result.failed)} file{'s' if len(result.failed) > 1 else ''} failed:", file=stream)
         for row in result.failed:
             print(f"  {row.file}: {row.status}: {row.message}", file=stream)
+    from taptune.batch.on_machine import MACHINE_FAILED
+
+    machine_failed = [r for r in result.rows if r.status == "ok" and r.message.startswith(MACHINE_FAILED)]
+    if machine_failed:
+        print(f"identified, but not on the machine ({len(machine_failed)}):", file=stream)
+        for row in machine_failed:
+            print(f"  {row.file}: {row.message.split('; ')[0][len(MACHINE_FAILED):].strip()}", file=stream)
 
 
 def run(args) -> int:

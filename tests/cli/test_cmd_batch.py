@@ -185,3 +185,66 @@ def test_fifty_recordings_with_a_few_bad_ones(tmp_path, capsys):
     rows = read_summary(tmp_path / "out" / "summary.csv")
     assert len(rows) == 50 and sum(r["status"] == "ok" for r in rows) == 46
     assert HolderLibrary(tmp_path / "lib.json").names() == sorted(f"ER32 h{k}" for k in range(8))
+
+
+# ----------------------------------------------------------------------------- --machine
+
+MACHINE = REPO / "recordings" / "machine" / "machine.toml"
+CUT = ["--teeth", "4", "--material", "al6082", "--ae", "4", "--milling", "down"]
+
+
+def test_batch_on_the_machine_matches_taptune_lobes_and_draws_the_frf_and_lobes(folder, tmp_path, capsys, monkeypatch):
+    import taptune.report.machine_page as machine_page
+
+    drawn = []
+    real_draw = machine_page.draw_machine
+    monkeypatch.setattr(machine_page, "draw_machine", lambda fig, view: (drawn.append(view), real_draw(fig, view)))
+    out, pdf = tmp_path / "out", tmp_path / "report.pdf"
+    code, stdout, stderr = run_cli([folder / "a", "--out", out, "--no-save", "--report", pdf, "--machine", MACHINE,
+                                    *CUT, *BUDGET], capsys)
+    assert code == 0, stdout + stderr
+    rows = {Path(r["file"]).name: r for r in read_summary(out / "summary.csv")}
+    assert set(rows) == {"one.wav", "two.wav"}
+    assert all(float(r["a_crit_mm"]) > 0 and float(r["best_pocket_a_lim_mm"]) > float(r["a_crit_mm"])
+               and float(r["best_pocket_rpm"]) > 0 for r in rows.values())
+    pages = re.findall(rb"/Type\s*/Page\b(?!s)", pdf.read_bytes())
+    assert len(pages) == 1 + 2  # the machine row is on each recording's page, not a page of its own
+    assert len(drawn) == 2 and all(not v.error and len(v.rpm) > 100 for v in drawn)
+
+    # The same holder through 'taptune lobes --params <result JSON>': another route to the same lobes.
+    lobes_json = tmp_path / "lobes.json"
+    code = main(["lobes", str(folder / "a" / "one.toml"), "--params", str(out / "one.json"), "--machine", str(MACHINE),
+                 *CUT, "--json", str(lobes_json)])
+    capsys.readouterr()
+    assert code == 0
+    assert json.loads(lobes_json.read_text())["a_crit_mm"] == pytest.approx(float(rows["one.wav"]["a_crit_mm"]), rel=1e-3)
+
+
+def test_without_machine_the_machine_columns_are_empty(folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    run_cli([folder / "a" / "one.wav", "--out", out, "--no-save", *BUDGET], capsys)
+    (row,) = read_summary(out / "summary.csv")
+    assert (row["a_crit_mm"], row["best_pocket_rpm"], row["best_pocket_a_lim_mm"]) == ("", "", "")
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--machine", "{tmp}/nope.toml", *CUT], "nope.toml"),
+    (["--machine", "{tmp}/broken.toml", *CUT], "broken.toml"),
+    (["--machine", str(MACHINE), "--teeth", "4", "--material", "al6082"], "the cut needs --ae, --milling"),
+    (["--machine", str(MACHINE), *CUT, "--material", "unobtainium"], "unobtainium"),
+    (["--machine", str(MACHINE), *CUT, "--diameter", "3"], "--ae 4 mm exceeds the tool diameter 3 mm"),
+    (["--machine", str(MACHINE), *CUT, "--rpm", "9000", "1000", "10"], "--rpm 9000 1000 10"),
+    (["--machine", str(MACHINE), *CUT, "--freq", "10", "90000", "2"], "choose a grid inside"),
+    ([*CUT], "--teeth, --material, --ae, --milling describe the machine part: give --machine"),
+])
+def test_a_bad_machine_or_cut_exits_2_before_anything_is_written(tmp_path, capsys, extra, message):
+    recordings = tmp_path / "rec"
+    recordings.mkdir()
+    (recordings / "x.wav").write_bytes(b"x")
+    (tmp_path / "broken.toml").write_text("[machine]\nname = 'no spindle'\n")
+    out, lib, pdf = tmp_path / "out", tmp_path / "lib.json", tmp_path / "reports" / "r.pdf"
+    args = [recordings, "--out", out, "--library", lib, "--report", pdf, *[a.format(tmp=tmp_path) for a in extra]]
+    code, stdout, err = run_cli(args, capsys)
+    assert (code, err.count("\n")) == (2, 1), err
+    assert message in err and "Traceback" not in err
+    assert not out.exists() and not lib.exists() and not pdf.parent.exists()  # nothing written, not even a folder
