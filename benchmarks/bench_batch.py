@@ -7,7 +7,12 @@ again), each with a fresh output folder and library. The wall time includes proc
 writes and summary.csv.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_batch.py [--count 50] [--jobs 1 2]
-        [--population 64 --generations 90]
+        [--population 64 --generations 90] [--machine]
+
+With ``--machine`` every run also puts each identified holder on the example machine
+(recordings/machine/machine.toml; 4 teeth, al6082, ae 4 mm down-milling), and the extra
+CPU of that part per recording is measured on its own, in this process
+(``time.process_time`` around the tool-point FRF, the lobes and the lobes CSV).
 
 On a shared machine the wall-clock numbers move with the other load (the load average
 before each run is printed); the CPU seconds per recording do not, much.
@@ -29,6 +34,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 ASSEMBLY = REPO / "recordings" / "er32_d16.toml"
+MACHINE = REPO / "recordings" / "machine" / "machine.toml"
+CUT = ["--teeth", "4", "--material", "al6082", "--ae", "4", "--milling", "down"]
 
 
 def write_recordings(folder: Path, count: int) -> None:
@@ -62,14 +69,33 @@ def run_batch(folder: Path, out: Path, jobs: int, budget: list[str]) -> tuple[fl
     return wall, cpu, proc.returncode, "\n".join(proc.stdout.splitlines()[-5:])
 
 
+def machine_cpu_per_recording(folder: Path, count: int) -> float:
+    """CPU seconds of the batch's machine part (tool point, lobes, CSV) per recording, nominal holder."""
+    from taptune.batch.on_machine import machine_part
+    from taptune.cli.cmd_batch import add_parser, machine_setup
+    from taptune.io.assembly import load_assembly
+    from taptune.model import NOMINAL
+
+    sub = argparse.ArgumentParser().add_subparsers()
+    args = add_parser(sub, "batch", "").parse_args([str(folder), "--machine", str(MACHINE), *CUT])
+    setup = machine_setup(args)
+    assemblies = [load_assembly(folder / f"r{i:03d}.toml") for i in range(count)]
+    t0 = time.process_time()
+    for i, asm in enumerate(assemblies):
+        part = machine_part(NOMINAL, None, asm, setup, folder / f"machine{i:03d}.json")
+        assert not part.error, part.error
+    return (time.process_time() - t0) / count
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=int, default=50)
     ap.add_argument("--jobs", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--population", type=int, default=None, help="GA population (default: the library default)")
     ap.add_argument("--generations", type=int, default=None, help="GA generations (default: the library default)")
+    ap.add_argument("--machine", action="store_true", help="put each holder on the example machine too")
     args = ap.parse_args(argv)
-    budget = []
+    budget = CUT + ["--machine", str(MACHINE)] if args.machine else []
     if args.population:
         budget += ["--population", str(args.population)]
     if args.generations:
@@ -92,6 +118,10 @@ def main(argv=None) -> int:
                   f"{cpu / args.count:15.2f}  {load:11.1f}  {code:>4}", flush=True)
             if code != 0:
                 print(tail)
+        if args.machine:
+            n = min(args.count, 8)
+            print(f"\nmachine part alone: {machine_cpu_per_recording(folder, n):.3f} CPU-s per recording "
+                  f"(mean of {n}, in-process)")
     return 0
 
 
