@@ -38,7 +38,7 @@ def add_parser(sub, name, help_text):
         "on the machine", "with --machine, after each identification: the tool-point FRF of the recording's "
                           "assembly on the spindle and the stability lobes of the cut (as 'taptune lobes')")
     add_model_args(on_machine)
-    add_cut_args(p, on_machine, required=False, diameter_note=" of each recording")
+    add_cut_args(on_machine, on_machine, required=False, diameter_note=" of each recording")
     # Optimiser budget: for tests and quick looks, not for real identifications.
     p.add_argument("--population", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--generations", type=int, default=None, help=argparse.SUPPRESS)
