@@ -109,8 +109,8 @@ def dummy_model(dummy: Holder, points_m, model_options: ModelOptions | None = No
     n = 2 * len(z)
     dofs = element_dofs(body.n_elements, 0)
     zero = sp.csr_matrix((n, n))
-    fe = FEModel(K_tool=zero, K_holder=scatter(body.K(), dofs, n), M_tool=zero, M_holder=scatter(body.M(o.mass), dofs, n),
-                 T0=zero, T1=zero, R0=zero, R1=zero, z_holder=z, z_tool=np.zeros(0), n_elements=body.n_elements,
+    fe = FEModel(K_tool=zero, K_holder=scatter(body.K(), dofs, n), M_tool=zero,
+                 M_holder=scatter(body.M(o.mass), dofs, n), T0=zero, T1=zero, R0=zero, R1=zero, z_holder=z, z_tool=np.zeros(0), n_elements=body.n_elements,
                  contact_nodes=np.zeros((0, 2), dtype=int), options=o)
     nodes = [int(np.argmin(np.abs(z - zp))) for zp in z_pts]
     return fe, [2 * k for k in nodes] + [0, 1]
@@ -222,7 +222,8 @@ def spindle_from_dummy(dummy: Holder, point_a_m: float, point_b_m: float, freq_h
     if f[0] <= 0 or np.any(np.diff(f) <= 0):
         raise InputError(f"{source}: frequencies must be positive and strictly ascending")
     if abs(point_a_m - point_b_m) < 1 * MM:
-        raise InputError(f"{source}: points a and b must be at least 1 mm apart (got {point_a_m / MM:g} and {point_b_m / MM:g} mm)")
+        raise InputError(f"{source}: points a and b must be at least 1 mm apart "
+                         f"(got {point_a_m / MM:g} and {point_b_m / MM:g} mm)")
     warnings: list[str] = []
     noise = frf_noise(g)
     if smooth == "auto":
@@ -236,7 +237,8 @@ def spindle_from_dummy(dummy: Holder, point_a_m: float, point_b_m: float, freq_h
         )
     elif int(smooth) > 0:
         g = [smooth_frf(f, v, int(smooth)) for v in g]
-        warnings.append(f"{source}: FRFs smoothed over {2 * int(smooth) + 1} points (local quadratic) before the inverse RCSA")
+        warnings.append(f"{source}: FRFs smoothed over {2 * int(smooth) + 1} points (local quadratic) "
+                        "before the inverse RCSA")
     fe, dofs = dummy_model(dummy, (point_a_m, point_b_m), model_options)
     h = point_receptance(fe, _NOMINAL, dofs, f)
     x, cond, a = inverse_rcsa(h, *g)
