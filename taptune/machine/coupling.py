@@ -33,7 +33,7 @@ from taptune.io.assembly import Assembly
 from taptune.io.machine import SpindleReceptance
 from taptune.machine.blocks import receptance_blocks
 from taptune.machine.lumped import LumpedJoint, lumped_contact_model
-from taptune.machine.peaks import FRFMode, dominant_modes
+from taptune.machine.peaks import dominant_modes
 from taptune.machine.plane import coupling_plane, cut_assembly
 from taptune.model.fe import FEModel, build_model, rigid_contact_model
 from taptune.model.options import ModelOptions

@@ -109,8 +109,8 @@ def dummy_model(dummy: Holder, points_m, model_options: ModelOptions | None = No
     n = 2 * len(z)
     dofs = element_dofs(body.n_elements, 0)
     zero = sp.csr_matrix((n, n))
-    fe = FEModel(K_tool=zero, K_holder=scatter(body.K(), dofs, n), M_tool=zero, M_holder=scatter(body.M(o.mass), dofs, n),
-                 T0=zero, T1=zero, R0=zero, R1=zero, z_holder=z, z_tool=np.zeros(0), n_elements=body.n_elements,
+    fe = FEModel(K_tool=zero, K_holder=scatter(body.K(), dofs, n), M_tool=zero,
+                 M_holder=scatter(body.M(o.mass), dofs, n), T0=zero, T1=zero, R0=zero, R1=zero, z_holder=z, z_tool=np.zeros(0), n_elements=body.n_elements,
                  contact_nodes=np.zeros((0, 2), dtype=int), options=o)
     nodes = [int(np.argmin(np.abs(z - zp))) for zp in z_pts]
     return fe, [2 * k for k in nodes] + [0, 1]
@@ -222,7 +222,8 @@ def spindle_from_dummy(dummy: Holder, point_a_m: float, point_b_m: float, freq_h
     if f[0] <= 0 or np.any(np.diff(f) <= 0):
         raise InputError(f"{source}: frequencies must be positive and strictly ascending")
     if abs(point_a_m - point_b_m) < 1 * MM:
-        raise InputError(f"{source}: points a and b must be at least 1 mm apart (got {point_a_m / MM:g} and {point_b_m / MM:g} mm)")
+        raise InputError(f"{source}: points a and b must be at least 1 mm apart "
+                         f"(got {point_a_m / MM:g} and {point_b_m / MM:g} mm)")
     warnings: list[str] = []
     noise = frf_noise(g)
     if smooth == "auto":
@@ -236,7 +237,8 @@ def spindle_from_dummy(dummy: Holder, point_a_m: float, point_b_m: float, freq_h
         )
     elif int(smooth) > 0:
         g = [smooth_frf(f, v, int(smooth)) for v in g]
-        warnings.append(f"{source}: FRFs smoothed over {2 * int(smooth) + 1} points (local quadratic) before the inverse RCSA")
+        warnings.append(f"{source}: FRFs smoothed over {2 * int(smooth) + 1} points (local quadratic) "
+                        "before the inverse RCSA")
     fe, dofs = dummy_model(dummy, (point_a_m, point_b_m), model_options)
     h = point_receptance(fe, _NOMINAL, dofs, f)
     x, cond, a = inverse_rcsa(h, *g)
@@ -251,12 +253,26 @@ def spindle_from_dummy(dummy: Holder, point_a_m: float, point_b_m: float, freq_h
 
 
 def frf_noise(g) -> float:
-    """Relative noise of the roughest FRF, estimated from third differences.
+    """Relative noise of the roughest FRF, estimated from third differences at two strides.
 
-    The third difference of a smooth FRF on a fine grid is tiny; of white noise with
-    relative standard deviation σ it is about √20 σ |G| (median over the band).
+    White noise of relative standard deviation σ gives third differences of about
+    √20 σ |G| at any stride; a smooth FRF gives third differences that grow 8× when the
+    stride doubles. With r1, r2 the median relative third differences at strides 1 and
+    2 (over √20), σ² ≈ (64 r1² − r2²) / 63, so a coarse grid on a clean FRF is not
+    mistaken for noise.
     """
-    return float(max(np.median(np.abs(np.diff(v, 3)) / np.abs(v[1:-2])) / np.sqrt(20) for v in g))
+
+    def rough(v, k):
+        w = v[::k]
+        return np.median(np.abs(np.diff(w, 3)) / np.maximum(np.abs(w[1:-2]), 1e-300)) / np.sqrt(20)
+
+    out = 0.0
+    for v in g:
+        if len(v) < 12:
+            continue
+        r1, r2 = rough(v, 1), rough(v, 2)
+        out = max(out, float(np.sqrt(max(0.0, (64 * r1 * r1 - r2 * r2) / 63))))
+    return out
 
 
 def _amplification(h, g, hs) -> np.ndarray:

@@ -13,7 +13,8 @@ gives two eigenvalues Λ (both roots are kept), and each gives
 The stability boundary is the lower envelope of all (n_k, a_lim) curves on the
 requested speed grid: every lobe is cut into segments between consecutive scan points
 (monotonic pieces) and each is interpolated linearly onto the grid speeds it spans; the
-chatter frequency of the segment that sets the boundary is kept per speed. Lobes are followed down to the lowest requested speed.
+chatter frequency of the segment that sets the boundary is kept per speed. Lobes are
+followed down to the lowest requested speed.
 
 Chatter-frequency scan: every frequency of the FRF grid, plus ``refine`` extra points
 per grid interval (cubic interpolation of the FRF in re and im) within ``REFINE_BANDS``
