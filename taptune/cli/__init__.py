@@ -20,6 +20,7 @@ COMMANDS = {
     "model": "free-free model of an assembly (bending frequencies, damping)",
     "identify": "identify a holder from a tap recording and store it in the library",
     "predict": "predict a library holder with a tool at other stick-outs",
+    "check": "check a library holder with one tap: consistent, differs (worn, badly seated) or inconclusive",
     "batch": "identify every recording under folders, in parallel",
     "library": "list, show, export, import or remove holders; export receptances (UFF58, CSV)",
     "record": "record taps from the microphone into a WAV file",
