@@ -275,7 +275,8 @@ def _bandwidth_warnings(name, expected_hz, bandwidth_hz, low_pass, recording) ->
             out.append(f"{name}: sample rate {fs} Hz: bending mode {mode} expected near {f / 1000:.1f} kHz "
                        f"is above 0.9 x Nyquist; record at a higher rate (96 kHz)")
             continue
-        cut = f"{bandwidth_hz / 1000:.1f} kHz ({recording.codec.upper() if recording.lossy else 'a codec'} low-pass?)"
+        source = f"{recording.codec.upper()} low-pass?" if recording.lossy else "a phone's or an app's low-pass?"
+        cut = f"{bandwidth_hz / 1000:.1f} kHz ({source})"
         what = ("cannot be measured" if f >= bandwidth_hz
                 else "sits at that edge, where the codec bends peaks")
         out.append(f"{name}: the recording carries nothing above {cut}; bending mode {mode} expected near "

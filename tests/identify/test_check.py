@@ -44,6 +44,12 @@ def test_one_mode_far_outside_differs():
     assert r.modes[0].z == pytest.approx(-(15.0 - 6.0) / (5e-4 * 2985.0))
 
 
+def test_modes_above_the_prediction_differ_and_point_at_the_description():
+    r = _check((3020.0, 10000.0, 16000.0))
+    assert r.verdict == "differs" and "wear does not do" in r.reasons[-1]
+    assert "wear does not do" not in " ".join(_check((2985.0, 10000.0, 16000.0)).reasons)
+
+
 def test_two_modes_just_below_their_bands_differ():
     # Each alone is borderline (1-2 sigma beyond); together they point the same way: a softer contact.
     r = _check((2992.0, 9965.0, 16000.0))

@@ -71,3 +71,21 @@ def test_hidden_modes_by_cut_off_and_by_nyquist():
     assert [m for m, *_ in hidden_modes([4000.0, 15600.0, 20000.0], 16000.0, FS)] == [2, 3]
     assert hidden_modes([4000.0, 12000.0, 22000.0], FS / 2, FS) == [(3, 22000.0, pytest.approx(21600.0))]
     assert hidden_modes([], 16000.0, FS) == []
+
+
+def test_a_steep_low_pass_in_a_wav_hides_the_third_mode():
+    """A recorder app's resampling filter (60 dB down from 12.5 kHz), then a WAV: f3 (15.3 kHz) is gone."""
+    from scipy.signal import cheby2, sosfilt
+
+    from taptune.io.audio import make_recording
+    from taptune.signal.analysis import analyse_recording
+    from tests.signal.synthetic import workshop_recording
+
+    rec = workshop_recording(5)
+    x = sosfilt(cheby2(12, 60, 12500.0, fs=rec.sample_rate, output="sos"), rec.samples, axis=0)
+    a = analyse_recording(make_recording(x, rec.sample_rate, path="phone.wav", subtype="PCM_24"),
+                          expected_hz=np.array([3600.0, 11000.0, 15500.0]))
+    assert 11500.0 <= a.bandwidth_hz <= 13500.0
+    hidden = [w for w in a.warnings if "low-pass" in w]
+    assert len(hidden) == 1 and hidden[0].startswith("phone.wav: ") and "a phone's or an app's low-pass?" in hidden[0]
+    assert "bending mode 3 expected near 15.5 kHz cannot be measured" in hidden[0]
