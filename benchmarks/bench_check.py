@@ -5,7 +5,10 @@ non-linear contact profile, description errors, nut mass, doublets, phone record
 identify it from its tap with the described assembly, then check taps of
 (a) the same holder at its first query stick-out (expected ``consistent``),
 (b) the same holder with its contact stiffness × 0.5 and × 0.3 at the recorded stick-out
-(expected ``differs``), and (c) × 0.5 at the query stick-out (expected ``differs``).
+(expected ``differs``), (c) × 0.5 at the query stick-out (expected ``differs``), and
+(d) the same holder clamped again at the recorded stick-out (``consistent``; the ruler
+error of re-clamping is drawn anew). :func:`rejudge` re-evaluates the verdicts of saved
+rows with other bands (``check_tap`` is a pure function): how the verdicts depend on the band.
 Needs ``benchmarks.realism`` (the corpus). One identification ≈ 5–7 CPU-s.
 
     python -m benchmarks.bench_check --n 12 [--split check|infamily] [--out check.json]
@@ -43,7 +46,9 @@ def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
     identify_cpu = time.process_time() - t0
     entry = entry_from_identification(result, [rec], [ref.described])
     query = ref.queries[0].stickout_mm
-    pairs = [(elsewhere(ref, query), "consistent", "elsewhere"), (worn(ref, 0.5), "differs", "worn 0.5"),
+    here = ref.described.stickout * 1e3
+    pairs = [(elsewhere(ref, here), "consistent", "re-clamped"), (elsewhere(ref, query), "consistent", "elsewhere"),
+             (worn(ref, 0.5), "differs", "worn 0.5"),
              (worn(ref, 0.3), "differs", "worn 0.3"), (worn(ref, 0.5, query), "differs", "worn 0.5 elsewhere")]
     rows = []
     for other, expected, kind in pairs:
@@ -67,6 +72,22 @@ def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
     return rows
 
 
+def rejudge(row: dict, scale: float = 1.0, floor: float = 0.0) -> str:
+    """The verdict of a saved row with every band × ``scale`` and at least ``floor`` × f."""
+    from types import SimpleNamespace
+
+    from taptune.identify import Prediction
+    from taptune.identify.check import check_tap
+
+    modes = row["modes"]
+    peaks = [SimpleNamespace(hz=m["measured_hz"], mode=m["mode"], kind="bending", scatter_hz=m["sigma_hz"])
+             for m in modes if m["status"] not in ("not measured", "hidden")]
+    bands = tuple(max(scale * m["band_hz"], floor * m["predicted_hz"]) for m in modes)
+    prediction = Prediction(row["stickout_mm"], tuple(m["predicted_hz"] for m in modes), bands, (0.0,) * 3, (0.0,) * 3)
+    analysis = SimpleNamespace(bending_peaks=peaks, bandwidth_hz=None)
+    return check_tap(analysis, prediction, worn_hz=row["worn_hz"]).verdict
+
+
 def confusion(rows: list[dict]) -> dict:
     """{pair kind: Counter(verdict)}."""
     table: dict[str, Counter] = {}
@@ -81,7 +102,15 @@ def main(argv=None) -> int:
     ap.add_argument("--first", type=int, default=0, help="first reference index")
     ap.add_argument("--split", default="check", help="corpus split: check (held out) or infamily (the control)")
     ap.add_argument("--out", help="write every row as JSON")
+    ap.add_argument("--rejudge", metavar="JSON", help="only re-evaluate saved rows with scaled and floored bands")
     args = ap.parse_args(argv)
+    if args.rejudge:
+        with open(args.rejudge) as f:
+            saved = [r for r in json.load(f) if "modes" in r]
+        for scale, floor in [(1, 0), (2, 0), (3, 0), (1, 0.005), (1, 0.01), (2, 0.005)]:
+            print(f"\nbands x{scale}, at least {100 * floor:g} %")
+            print_confusion([{**r, "verdict": rejudge(r, scale, floor)} for r in saved])
+        return 0
     rows = []
     folder = tempfile.mkdtemp(prefix="bench-check-")
     for i in range(args.first, args.first + args.n):
@@ -93,10 +122,15 @@ def main(argv=None) -> int:
         if args.out:
             with open(args.out, "w") as f:
                 json.dump(rows, f, indent=1)
-    print("\npair kind            consistent  differs  inconclusive  error")
+    print()
+    print_confusion(rows)
+    return 0
+
+
+def print_confusion(rows: list[dict]) -> None:
+    print("pair kind            consistent  differs  inconclusive  error")
     for kind, c in confusion(rows).items():
         print(f"{kind:<20} {c['consistent']:>10} {c['differs']:>8} {c['inconclusive']:>13} {c['error']:>6}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -1,10 +1,10 @@
 """Check a library holder by one tap, and keep the check in its history.
 
 ``check_holder`` is the one call for the CLI (``taptune check``) and the app's Check
-button: read nothing, decide nothing about files — it takes a recording and an assembly,
-labels the tap with the holder's own parameters, predicts the assembly from the library,
-compares (:func:`taptune.identify.check.check_tap`) and appends a :class:`CheckRecord`
-to the holder under the library lock.
+button. It takes a recording and an assembly (the caller reads those files), labels the
+tap with the holder's own parameters, predicts the assembly from the library, compares
+(:func:`taptune.identify.check.check_tap`) and appends a :class:`CheckRecord` to the
+holder under the library lock.
 """
 
 from __future__ import annotations
@@ -43,7 +43,8 @@ class HolderCheck:
                 "tool": self.record.tool, "stickout": round(self.record.stickout_mm, 4),
                 **{k: v for k, v in self.result.to_dict().items() if k != "verdict"},
                 "worn_hz": [round(f, 2) for f in self.worn_hz],
-                "bandwidth_hz": self.analysis.to_dict()["bandwidth_hz"], "taps": self.analysis.n_taps,
+                "bandwidth_hz": None if self.analysis.bandwidth_hz is None else round(self.analysis.bandwidth_hz, 1),
+                "taps": self.analysis.n_taps,
                 "saved": self.saved, "warnings": list(self.warnings)}
 
 
