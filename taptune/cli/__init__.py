@@ -20,6 +20,7 @@ COMMANDS = {
     "model": "free-free model of an assembly (bending frequencies, damping)",
     "identify": "identify a holder from a tap recording and store it in the library",
     "predict": "predict a library holder with a tool at other stick-outs",
+    "check": "check a library holder with one tap: consistent, differs (worn, badly seated) or inconclusive",
     "toolpoint": "tool-point FRF of a holder and tool on a machine (spindle receptance coupling)",
     "lobes": "milling stability lobes from the tool-point FRF (zero-order approximation)",
     "spindle": "spindle receptance from hammer tests on a dummy holder (inverse receptance coupling)",
