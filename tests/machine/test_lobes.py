@@ -115,5 +115,8 @@ def test_materials_table():
     al = cutting_coefficients("AL-6082")
     assert (al.ktc, al.krc) == (902e6, 243e6)
     assert all(m.source for m in MATERIALS.values())
+    # the names users type: aliases of the same published values
+    assert cutting_coefficients("aluminium-6082") is al
+    assert cutting_coefficients("Al7075-T6").ktc == 767e6
     with pytest.raises(InputError, match="unknown work material"):
         cutting_coefficients("unobtainium")
