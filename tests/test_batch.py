@@ -17,6 +17,7 @@ import pytest
 from tests.conftest import REFERENCE_TOML
 
 from taptune.batch import (
+    SUMMARY_HEADER,
     BatchOptions,
     Row,
     discover,
@@ -124,7 +125,11 @@ def test_result_names_keep_folders_and_separate_equal_stems(tmp_path):
 def test_rows_become_csv_cells_in_header_order():
     row = Row("a.wav", "H", "ok", (1000.0, 2000.0, None), (1000.25, 2000.0, 3000.0), 0.5, 1.234, "")
     assert row.csv_cells() == ["a.wav", "H", "ok", "1000.00", "2000.00", "", "1000.25", "2000.00", "3000.00",
-                               "0.500000", "1.23", ""]
+                               "0.500000", "1.23", "", "", "", ""]  # no machine part: its three cells empty
+    on_machine = Row("a.wav", "H", "ok", a_crit_mm=2.46521, best_pocket_rpm=22560.0, best_pocket_a_lim_mm=28.97931)
+    cells = dict(zip(SUMMARY_HEADER, on_machine.csv_cells()))
+    assert (cells["a_crit_mm"], cells["best_pocket_rpm"], cells["best_pocket_a_lim_mm"]) == ("2.4652", "22560", "28.9793")
+    assert len(SUMMARY_HEADER) == len(cells) and SUMMARY_HEADER[-1] == "message"
     assert not row.failed and Row("b.wav", "", "error").failed
 
 

@@ -63,6 +63,7 @@ def machine_part(params, model_options, assembly, setup: MachineSetup, json_path
         lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc, krc=cut.krc,
                                 diameter=diameter_mm * 1e-3, ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm)
     except InputError as err:
+        lobes_csv_path(json_path).unlink(missing_ok=True)  # a --force rerun leaves no lobes of an older result
         return failed_part(base, title, one_line(err))
     out = lobes.to_dict()
     csv_path = lobes_csv_path(json_path)

@@ -248,3 +248,19 @@ def test_a_bad_machine_or_cut_exits_2_before_anything_is_written(tmp_path, capsy
     assert (code, err.count("\n")) == (2, 1), err
     assert message in err and "Traceback" not in err
     assert not out.exists() and not lib.exists() and not pdf.parent.exists()  # nothing written, not even a folder
+
+
+def test_the_final_list_names_recordings_identified_but_not_put_on_the_machine(tmp_path):
+    import io
+
+    from taptune.batch import BatchResult, Row
+    from taptune.cli.cmd_batch import print_result
+
+    rows = (Row("a.wav", "A", "ok", a_crit_mm=2.5),
+            Row("b.wav", "B", "ok", message="machine part failed: b.toml: the tool reaches behind the coupling plane; "
+                                            "1 warning: something"))
+    stream = io.StringIO()
+    print_result(BatchResult(rows, tmp_path / "summary.csv"), tmp_path, stream)
+    text = stream.getvalue()
+    assert "2 recordings: 2 ok" in text and "failed:" not in text.replace("machine part failed:", "")
+    assert "identified, but not on the machine (1):\n  b.wav: b.toml: the tool reaches behind the coupling plane\n" in text
