@@ -125,3 +125,29 @@ def write_case(case, folder) -> Path:
             assembly_to_toml(case.described_at(q.stickout_mm)), encoding="utf-8")
     (folder / f"{case.name}.truth.json").write_text(json.dumps(case.to_dict(), indent=1), encoding="utf-8")
     return folder
+
+
+def write_check_pairs(n: int, folder) -> Path:
+    """Write the held-out ``taptune check`` pairs (:func:`~benchmarks.realism.corpus.check_pairs`).
+
+    One sub-folder per pair, ``pair<k>/``, holding ``reference.wav/.toml``,
+    ``other.wav/.toml`` and ``expected.json`` (``{"verdict": "consistent"|"differs", ...}``).
+    """
+    from taptune.io.assembly import assembly_to_toml
+    from taptune.io.audio import write_audio
+
+    from benchmarks.realism.corpus import check_pairs
+
+    folder = Path(folder)
+    for k, (ref, other, verdict) in enumerate(check_pairs(n)):
+        sub = folder / f"pair{k:02d}"
+        sub.mkdir(parents=True, exist_ok=True)
+        for tag, case in (("reference", ref), ("other", other)):
+            rec = record(case, path=str(sub / f"{tag}.wav"))
+            write_audio(rec.path, rec.samples, rec.sample_rate, rec.subtype)
+            (sub / f"{tag}.toml").write_text(assembly_to_toml(case.described), encoding="utf-8")
+        info = {"verdict": verdict, "reference": ref.name, "other": other.name,
+                "reference_truth": ref.truth.to_dict(), "other_truth": other.truth.to_dict(),
+                "contact_factor": other.holder.params.k_tt / ref.holder.params.k_tt}
+        (sub / "expected.json").write_text(json.dumps(info, indent=1), encoding="utf-8")
+    return folder

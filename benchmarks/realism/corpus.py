@@ -48,15 +48,27 @@ DIAMETER_REL = 0.015
 
 @dataclass(frozen=True)
 class Query:
-    """A prediction request: the described stick-out and the truth there."""
+    """A prediction request: the described stick-out and the truth there.
+
+    ``ruler_hz`` is the true holder at the DESCRIBED stick-out: ``truth`` minus it is what
+    the ruler error alone moves the frequencies (a floor no holder model can beat).
+    """
 
     stickout_mm: float  # described
     true_stickout_mm: float
     truth: TruthModes
+    ruler_hz: tuple = ()
 
     def to_dict(self) -> dict:
         return {"stickout_mm": self.stickout_mm, "true_stickout_mm": round(self.true_stickout_mm, 4),
-                **self.truth.to_dict()}
+                **self.truth.to_dict(), "ruler_hz": [round(f, 3) for f in self.ruler_hz]}
+
+
+def make_query(true_asm: Assembly, holder: TruthHolder, stickout_mm: float, true_stickout_mm: float) -> Query:
+    """The truth at a query: at the true stick-out, and at the described one (ruler floor)."""
+    at = truth_modes(true_asm.with_stickout(true_stickout_mm * MM), holder)
+    ruler = at if true_stickout_mm == stickout_mm else truth_modes(true_asm.with_stickout(stickout_mm * MM), holder)
+    return Query(stickout_mm, true_stickout_mm, at, ruler.bending_hz)
 
 
 @dataclass(frozen=True)
@@ -248,7 +260,7 @@ def make_case(split: str, index: int, in_family: bool = False) -> Case:
 
 
 def _try_case(rng, split, index, seed, in_family) -> Case | None:
-    family = FAMILIES[int(rng.integers(len(FAMILIES)))]
+    family = FAMILIES[index % len(FAMILIES)]  # every family equally often
     d = float(rng.choice(family.diameters))
     total, flute = TOOLS[int(d)][int(rng.integers(2))]
     name = f"{split[:3]}{index:03d}-{family.key}-D{d:g}"
@@ -301,7 +313,7 @@ def _try_case(rng, split, index, seed, in_family) -> Case | None:
         queries = []
         for off in offsets:
             q_true = stickout + off + float(rng.uniform(-ruler, ruler))
-            queries.append(Query(stickout + off, q_true, truth_modes(true_asm.with_stickout(q_true * MM), holder)))
+            queries.append(make_query(true_asm, holder, stickout + off, q_true))
         truth = truth_modes(true_asm, holder)
     except InputError:
         return None
@@ -362,3 +374,47 @@ def check_pairs(n: int) -> list[tuple[Case, Case, str]]:
         for factor in (0.5, 0.3):
             out.append((ref, worn(ref, factor), "differs"))
     return out
+
+
+# ----------------------------------------------------------------------------- ablation
+
+
+def without(case: Case, kind: str) -> Case:
+    """The case with one deviation of :data:`KINDS` removed (truth recomputed), to attribute errors.
+
+    ``lowgrade`` becomes an ordinary 48 kHz, 24-bit recording at 40 dB SNR with the same taps.
+    """
+    from benchmarks.realism.geometry import FAMILIES
+
+    if kind not in KINDS:
+        raise ValueError(f"unknown deviation {kind!r}")
+    kinds = tuple(k for k in case.kinds if k != kind)
+    holder, rec = case.holder, case.recording
+    od_f, ratio = case.true_od_factors, case.true_flute_ratio
+    rec_so = case.true_assembly.stickout / MM
+    q_so = [q.true_stickout_mm for q in case.queries]
+    if kind == "profile":
+        holder = replace(holder, profile=Profile())
+    elif kind == "mass":
+        holder = replace(holder, extra_mass=ExtraMass())
+    elif kind == "doublet":
+        holder = replace(holder, asymmetry=0.0)
+    elif kind == "diameters":
+        od_f = (1.0,) * len(od_f)
+    elif kind == "flute":
+        ratio = 0.8
+    elif kind == "stickout":
+        rec_so, q_so = case.described.stickout / MM, [q.stickout_mm for q in case.queries]
+    elif kind == "lowgrade":
+        rec = replace(rec, nuisances=replace(rec.nuisances, sample_rate=48000, snr_db=40.0, mic_lp_hz=20000.0),
+                      bits=24, phone_lp_hz=None)
+    family = next(f for f in FAMILIES if f.key == case.family)
+    t = case.described.tool
+    d = t.flute_diameter / MM
+    true_holder = make_holder(family, d, case.described.holder.name, od_f)
+    true_tool = make_tool(d, t.total_length / MM, t.flute_length / MM, ratio)
+    true_asm = assemble_geometry(true_holder, true_tool, rec_so, case.true_assembly.source)
+    queries = tuple(make_query(true_asm, holder, q.stickout_mm, s) for q, s in zip(case.queries, q_so))
+    return replace(case, name=f"{case.name}-no{kind}", true_assembly=true_asm, holder=holder, recording=rec,
+                   truth=truth_modes(true_asm, holder), queries=queries, kinds=kinds, true_od_factors=od_f,
+                   true_flute_ratio=ratio)

@@ -27,7 +27,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from benchmarks.realism.corpus import KINDS, make_case  # noqa: E402
+from benchmarks.realism.corpus import KINDS, make_case, without  # noqa: E402
 
 MODES = (1, 2, 3)
 
@@ -59,14 +59,20 @@ def judge_labels(case, analysis, audible) -> list[dict]:
     return out
 
 
-def run_case(split: str, index: int, seed: int = 0) -> dict:
-    """Identify one case and predict its queries; a JSON-ready record."""
+def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None) -> dict:
+    """Identify one case and predict its queries; a JSON-ready record.
+
+    ``ablate`` names a deviation of :data:`~benchmarks.realism.corpus.KINDS` to remove first
+    (:func:`~benchmarks.realism.corpus.without`), to see what it costs.
+    """
     from benchmarks.realism.audio import audible_modes, record
     from taptune.errors import TaptuneError
     from taptune.identify import IdentifyOptions, predict
     from taptune.identify.pipeline import identify_recordings
 
     case = make_case(split, index)
+    if ablate and ablate in case.kinds:
+        case = without(case, ablate)
     out = case.to_dict()
     t0 = time.process_time()
     rec = record(case)
@@ -100,6 +106,7 @@ def run_case(split: str, index: int, seed: int = 0) -> dict:
             preds.append({
                 "stickout_mm": q.stickout_mm, "mode": n, "truth_hz": round(truth, 3), "predicted_hz": round(f, 3),
                 "spread_hz": round(s, 3), "error_pct": round(100 * (f / truth - 1), 5),
+                "ruler_pct": round(100 * (q.ruler_hz[n - 1] / truth - 1), 5),
                 "half_width_pct": round(100 * s / f, 5), "covered": bool(abs(f - truth) <= s),
                 "measured": result.bending_measured_hz[0][n - 1] is not None,
             })
@@ -119,6 +126,8 @@ def _stats(preds: list[dict]) -> dict:
         "error_max_pct": round(float(np.max(err)), 4),
         "coverage": round(float(np.mean([p["covered"] for p in preds])), 4),
         "half_width_median_pct": round(float(np.median([p["half_width_pct"] for p in preds])), 4),
+        # What the ruler error at the query alone moves the truth (no model can beat it).
+        "ruler_median_pct": round(float(np.median(np.abs([p.get("ruler_pct", 0.0) for p in preds]))), 4),
     }
 
 
@@ -161,12 +170,14 @@ def print_summary(s: dict, title: str) -> None:
     print(f"labels right / audible bending modes: {lab['right']}/{lab['audible_modes']} "
           f"(wrong peak {lab['audible_wrong_peak']}, missed {lab['audible_missed']}; "
           f"inaudible modes given a wrong peak: {lab['inaudible_labelled_wrong']})")
-    print(f"{'predictions':24s} {'n':>4s} {'|err| med %':>11s} {'p90 %':>7s} {'max %':>7s} {'covered':>8s} {'±med %':>7s}")
+    print(f"{'predictions':24s} {'n':>4s} {'|err| med %':>11s} {'p90 %':>7s} {'max %':>7s} {'covered':>8s} {'±med %':>7s}"
+          f" {'ruler med %':>11s}")
 
     def row(name, st):
         if st["n"]:
             print(f"{name:24s} {st['n']:4d} {st['error_median_pct']:11.3f} {st['error_p90_pct']:7.3f} "
-                  f"{st['error_max_pct']:7.3f} {st['coverage']:8.0%} {st['half_width_median_pct']:7.3f}")
+                  f"{st['error_max_pct']:7.3f} {st['coverage']:8.0%} {st['half_width_median_pct']:7.3f}"
+                  f" {st['ruler_median_pct']:11.3f}")
 
     row("all", t)
     row("measured modes only", s["transfer_measured_modes"])
@@ -186,16 +197,18 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="identification seed")
     ap.add_argument("--jobs", type=int, default=1, help="cases identified in parallel processes")
     ap.add_argument("--out", default=None, help="results JSON")
+    ap.add_argument("--ablate", default=None, choices=KINDS, help="remove this deviation from every case")
     args = ap.parse_args(argv)
     t0 = time.time()
     indices = range(args.start, args.start + args.n)
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
-            records = list(pool.map(run_case, [args.split] * args.n, indices, [args.seed] * args.n))
+            records = list(pool.map(run_case, [args.split] * args.n, indices, [args.seed] * args.n,
+                                    [args.ablate] * args.n))
     else:
         records = []
         for i in indices:
-            records.append(run_case(args.split, i, args.seed))
+            records.append(run_case(args.split, i, args.seed, args.ablate))
             r = records[-1]
             print(f"{r['name']:28s} {','.join(r['kinds']):45s} cpu {r['cpu_s']:6.2f} s  "
                   + ("FAILED " + r["failed"] if "failed" in r else
@@ -205,7 +218,10 @@ def main(argv=None) -> int:
     print_summary(summary, f"{args.split} (seed {args.seed})")
     print(f"wall {time.time() - t0:.0f} s with {args.jobs} job(s), load {os.getloadavg()[0]:.1f}")
     if args.out:
-        meta = {"split": args.split, "n": args.n, "start": args.start, "seed": args.seed, "jobs": args.jobs,
+        import taptune
+
+        meta = {"split": args.split, "ablate": args.ablate, "taptune": os.path.dirname(taptune.__file__),
+                "code": os.environ.get("REALISM_CODE", ""), "n": args.n, "start": args.start, "seed": args.seed, "jobs": args.jobs,
                 "wall_s": round(time.time() - t0, 1), "load": round(os.getloadavg()[0], 2)}
         with open(args.out, "w", encoding="utf-8") as fh:
             json.dump({"meta": meta, "summary": summary, "cases": records}, fh, indent=1)
