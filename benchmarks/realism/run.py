@@ -73,7 +73,7 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None) -
     case = make_case(split, index)
     if ablate and ablate in case.kinds:
         case = without(case, ablate)
-    out = case.to_dict()
+    out = {"index": index, "ablate": ablate, **case.to_dict()}
     t0 = time.process_time()
     rec = record(case)
     try:
@@ -97,10 +97,18 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None) -
         "warnings": list(result.warnings) + list(analysis.warnings),
     }
     out["cpu_s"] = round(cpu, 3)
-    preds = []
     t1 = time.process_time()
+    out["predictions"] = predictions(case, lambda asm: predict(result.param_sets, asm),
+                                     result.bending_measured_hz[0])
+    out["predict_cpu_s"] = round(time.process_time() - t1, 3)
+    return out
+
+
+def predictions(case, predict_at, measured_hz) -> list[dict]:
+    """Compare ``predict_at(described assembly at a query) -> Prediction`` with the truth."""
+    preds = []
     for q in case.queries:
-        p = predict(result.param_sets, case.described_at(q.stickout_mm))
+        p = predict_at(case.described_at(q.stickout_mm))
         for n in MODES:
             truth, f, s = q.truth.bending_hz[n - 1], p.bending_hz[n - 1], p.bending_hz_spread[n - 1]
             preds.append({
@@ -108,10 +116,41 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None) -
                 "spread_hz": round(s, 3), "error_pct": round(100 * (f / truth - 1), 5),
                 "ruler_pct": round(100 * (q.ruler_hz[n - 1] / truth - 1), 5),
                 "half_width_pct": round(100 * s / f, 5), "covered": bool(abs(f - truth) <= s),
-                "measured": result.bending_measured_hz[0][n - 1] is not None,
+                "measured": measured_hz[n - 1] is not None,
             })
-    out["predictions"] = preds
-    out["predict_cpu_s"] = round(time.process_time() - t1, 3)
+    return preds
+
+
+def reevaluate(records: list[dict], band) -> list[dict]:
+    """Records with their predictions redone by another band method, without re-identifying.
+
+    Parameters
+    ----------
+    records : list of dict
+        ``cases`` of a results JSON (:func:`run_case` records).
+    band : callable
+        ``band(param_sets: list[HolderParams], assembly, record) -> Prediction`` (anything
+        with ``bending_hz`` and ``bending_hz_spread``), e.g.
+        ``lambda sets, asm, rec: taptune.identify.predict(sets, asm)``.
+
+    Returns
+    -------
+    list of dict
+        Copies of the records with new ``predictions``; pass them to :func:`summarise`.
+    """
+    from taptune.model.params import HolderParams
+
+    out = []
+    for rec in records:
+        if "failed" in rec:
+            out.append(rec)
+            continue
+        case = make_case(rec["split"], rec["index"])
+        if rec.get("ablate"):
+            case = without(case, rec["ablate"])
+        sets = [HolderParams(**p) for p in rec["identification"]["param_sets"]]
+        measured = rec["identification"]["bending_measured_hz"]
+        out.append({**rec, "predictions": predictions(case, lambda asm: band(sets, asm, rec), measured)})
     return out
 
 
@@ -149,6 +188,9 @@ def summarise(records: list[dict]) -> dict:
             "right": sum(lab["right"] for lab in audible),
             "audible_wrong_peak": sum(lab["wrong_peak"] for lab in audible),
             "audible_missed": sum(lab["labelled_hz"] is None for lab in audible),
+            # The issue's failure: the peak is there but got another label.
+            "audible_peak_mislabelled": sum(not lab["right"] and lab["peak_at_truth"] is not None for lab in audible),
+            "audible_no_peak": sum(lab["peak_at_truth"] is None for lab in audible),
             "inaudible_labelled_wrong": sum(lab["wrong_peak"] for lab in labels if not lab["audible"]),
         },
         "transfer": _stats(preds),
@@ -169,6 +211,7 @@ def print_summary(s: dict, title: str) -> None:
     print(f"\n== {title}: {s['cases']} cases" + (f", failed: {', '.join(s['failed'])}" if s["failed"] else ""))
     print(f"labels right / audible bending modes: {lab['right']}/{lab['audible_modes']} "
           f"(wrong peak {lab['audible_wrong_peak']}, missed {lab['audible_missed']}; "
+          f"peak there but mislabelled {lab['audible_peak_mislabelled']}, no peak picked {lab['audible_no_peak']}; "
           f"inaudible modes given a wrong peak: {lab['inaudible_labelled_wrong']})")
     print(f"{'predictions':24s} {'n':>4s} {'|err| med %':>11s} {'p90 %':>7s} {'max %':>7s} {'covered':>8s} {'±med %':>7s}"
           f" {'ruler med %':>11s}")

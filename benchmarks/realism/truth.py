@@ -79,7 +79,7 @@ class Profile:
         if self.kind not in PROFILE_KINDS:
             raise ValueError(f"unknown profile kind {self.kind!r}")
 
-    def raw_shape(self, d_mm) -> np.ndarray:
+    def raw_shape(self, d_mm, clamp_mm: float) -> np.ndarray:
         """Un-normalised intensity at distance ``d_mm`` from the front face [mm] → [–]."""
         d = np.asarray(d_mm, dtype=float)
         if self.kind == "linear":
@@ -89,7 +89,8 @@ class Profile:
             smooth = t * t * (3 - 2 * t)  # C1 ramp, no kink at its end
             return self.depth + (1 - self.depth) * smooth
         if self.kind == "crowned":
-            raise RuntimeError("crowned needs the clamp length: use shape()")
+            u = 2 * d / clamp_mm - 1
+            return 1.0 - self.depth * u * u
         # gap: two smooth steps (tanh edges)
         half = 0.5 * self.length_mm
         inside = 0.5 * (np.tanh((d - (self.position_mm - half)) / GAP_EDGE_MM * 2)
@@ -98,16 +99,9 @@ class Profile:
 
     def shape(self, d_mm, clamp_mm: float) -> np.ndarray:
         """Intensity at distance ``d_mm`` from the front face, mean 1 over the clamp length [–]."""
-        def raw(x):
-            x = np.asarray(x, dtype=float)
-            if self.kind == "crowned":
-                u = 2 * x / clamp_mm - 1
-                return 1.0 - self.depth * u * u
-            return self.raw_shape(x)
-
         grid = np.linspace(0.0, clamp_mm, 4001)
-        mean = np.trapezoid(raw(grid), grid) / clamp_mm
-        return raw(d_mm) / mean
+        mean = np.trapezoid(self.raw_shape(grid, clamp_mm), grid) / clamp_mm
+        return self.raw_shape(d_mm, clamp_mm) / mean
 
     def to_dict(self) -> dict:
         return asdict(self)
