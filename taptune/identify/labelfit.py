@@ -146,8 +146,11 @@ def level_cost(evaluator, p, peaks_by_mode: dict, options: "LabelFitOptions") ->
     for m in modes:
         pk = peaks_by_mode[m]
         zeta_model = float(e.damping_ratio[m - 1])
+        # A pole fit of a faint or crowded peak can return an absurd decay: the measured
+        # damping may correct the model's by at most a factor 3 either way.
         zeta = pk.damping_ratio if pk.damping_ratio and pk.damping_ratio > 0 else zeta_model
-        model_db = 20 * np.log10(h[m - 1] * zeta_model / zeta * f_model[m - 1] ** options.radiation_exponent)
+        ratio = float(np.clip(zeta_model / zeta, 1 / 3, 3))
+        model_db = 20 * np.log10(h[m - 1] * ratio * f_model[m - 1] ** options.radiation_exponent)
         resid.append(pk.level_db - model_db)
     r = np.asarray(resid) - np.mean(resid)
     return float(np.sum((r / options.sigma_level_db) ** 2))

@@ -157,7 +157,9 @@ class LabelOptions:
         modes far more than anything else, so it is rarely spurious.
     unexplained_cost : float
         Cost of leaving a loud peak unassigned while a mode whose bounds hold it is
-        missing (MODEL.md §8.3: a band or a distant guess must not silently drop it).
+        missing, or took a peak more than ``louder_db`` quieter (MODEL.md §8.3: a band
+        or a distant guess must not silently drop it).
+    louder_db : float
     """
 
     # Defaults chosen on synthetic recordings of random holders (the model's tip
@@ -174,6 +176,7 @@ class LabelOptions:
     loud_prominence_db: float = 20.0
     loud_level_db: float = -12.0
     unexplained_cost: float = 2.0
+    louder_db: float = 6.0
 
 
 def _explain_cost(r, basis, sigma_mode: float) -> float:
@@ -277,14 +280,15 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
             ms = np.array([m for m, _ in chosen])
             prior = _explain_cost(np.log(np.array(fs) / e[ms]), basis[ms], sigma)
             cost += prior + float(sum(unit[i] for _, i in chosen))
-        # A loud peak left unexplained inside the bounds of a mode left unassigned
-        # (between its assigned neighbours) costs: it is most likely that mode.
+        # A loud peak left unexplained inside the bounds of a mode (between its assigned
+        # neighbours) that is missing or took a quieter peak costs: a tip tap rings
+        # the bending modes loudest, so it is most likely that mode.
         for m, i in enumerate(combo):
-            if i is not None:
-                continue
             lo = max([hz[j] for mm, j in chosen if mm < m] + [bnd[m, 0]])
             hi = min([hz[j] for mm, j in chosen if mm > m] + [bnd[m, 1]])
-            if any(loud[k] and lo < hz[k] < hi and k not in combo for k in range(len(peaks))):
+            ceiling = -np.inf if i is None else peaks[i].level_db + options.louder_db
+            if any(loud[k] and k not in combo and lo < hz[k] < hi and peaks[k].level_db > ceiling
+                   for k in range(len(peaks))):
                 cost += options.unexplained_cost
         found.append(Labeling(tuple(combo), float(cost), float(prior)))
     found.sort(key=lambda lab: lab.cost)
