@@ -23,6 +23,7 @@ import json
 import math
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -108,7 +109,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", default="calibration")
     ap.add_argument("--n", type=int, default=24)
-    ap.add_argument("--cache", default=str(REPO / ".calibrate_cache"))
+    ap.add_argument("--cache", default=str(Path(tempfile.gettempdir()) / "taptune-calibrate-bands"))
     ap.add_argument("--records", help="a benchmarks.realism.run results JSON to use instead of identifying")
     ap.add_argument("--rows", help="per-prediction components (set, geometry, error): read if present, else written")
     args = ap.parse_args()
