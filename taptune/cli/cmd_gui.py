@@ -21,6 +21,9 @@ def add_parser(sub, name: str, help_text: str) -> None:
     p = sub.add_parser(name, help=help_text, description=help_text + ".")
     p.add_argument("wav", nargs="?", metavar="WAV", help="recording to open and analyse")
     p.add_argument("--assembly", metavar="FILE", help="assembly file (default: the .toml beside the WAV)")
+    p.add_argument("--second", metavar="WAV",
+                   help="a recording of the same holder and tool at another stick-out (its .toml beside it "
+                        "gives the stick-out); both are identified together")
     p.add_argument("--library", metavar="PATH", help="holder library file")
     p.add_argument("--holder", metavar="NAME", help="open the predictor with this library holder (and the assembly's tool)")
     p.add_argument("--screenshot", metavar="PNG", help="save a picture of the window to PNG and exit")
@@ -33,8 +36,11 @@ def add_parser(sub, name: str, help_text: str) -> None:
 def run(args) -> int:
     from taptune.errors import InputError
 
-    if args.wav and not Path(args.wav).is_file():
-        raise InputError(f"{args.wav}: no such file")
+    for wav in (args.wav, args.second):
+        if wav and not Path(wav).is_file():
+            raise InputError(f"{wav}: no such file")
+    if args.second and not args.wav:
+        raise InputError("--second needs the first recording (WAV) too")
     if args.assembly:
         from taptune.io.assembly import load_assembly
 
@@ -49,4 +55,4 @@ def run(args) -> int:
     from taptune.gui.app import run as run_app
 
     return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify,
-                   holder)
+                   holder, second=args.second)

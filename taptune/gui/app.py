@@ -89,10 +89,11 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
 
 def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
-        identify: bool = False, holder=None) -> int:
+        identify: bool = False, holder=None, second=None) -> int:
     """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
 
-    ``holder`` (a library entry) opens the predictor with it and the assembly's tool.
+    ``holder`` (a library entry) opens the predictor with it and the assembly's tool;
+    ``second`` is a recording at another stick-out, identified jointly with ``wav``.
 
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
@@ -111,12 +112,12 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     previous_hook = sys.excepthook
     install_excepthook(window)
     try:
-        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder)
+        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second)
     finally:
         sys.excepthook = previous_hook
 
 
-def _show(app, window, wav, assembly, screenshot, size, view, identify, holder) -> int:
+def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second=None) -> int:
     window.resize(*size)
     if assembly:
         window.assembly_panel.load_file(assembly)
@@ -126,8 +127,17 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder) 
     status = 0
     if wav:
         window.load_recording(str(wav), assembly)
+        if second and not screenshot:
+            def then_second(_analysis):
+                window.analysis_ready.disconnect(then_second)
+                window.load_second_recording(str(second))
+
+            window.analysis_ready.connect(then_second)
         if screenshot:
             outcome = _wait_analysis(window)
+            if outcome == "ok" and second:
+                window.load_second_recording(str(second))
+                outcome = _wait_analysis(window)
             if outcome != "ok":
                 print(f"taptune gui: {outcome}", file=sys.stderr)
                 status = 2

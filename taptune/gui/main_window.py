@@ -9,6 +9,7 @@ recording, the assembly and the library as they were.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 from PySide6.QtCore import Qt, QTimer, Signal
@@ -18,6 +19,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QMainWindow,
     QProgressBar,
+    QCheckBox,
     QPushButton,
     QScrollArea,
     QSplitter,
@@ -26,6 +28,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from taptune.gui.advice import Banner, second_tap_advice
 from taptune.gui.assembly_panel import AssemblyPanel
 from taptune.gui.fit_view import FitView
 from taptune.gui.library_view import LibraryView
@@ -71,11 +74,28 @@ def analyse_file(path: str, assembly):
     return recording, analysis, None if guidance is None else guidance[0]
 
 
-def run_identification(analysis, assembly, options, progress=None):
-    """One-recording identification (worker thread); ``progress`` may cancel it."""
+@dataclass(frozen=True)
+class Take:
+    """A recording opened in the window: file, audio, analysis, the model's guess, its assembly."""
+
+    path: str
+    recording: object
+    analysis: object
+    expected_hz: object
+    assembly: object
+
+
+def run_identification(analyses, assemblies, options, progress=None):
+    """Joint identification of one or several recordings (worker thread); ``progress`` may cancel it.
+
+    Returns ``(identification, advice)``: after a single recording, ``advice`` is
+    :func:`~taptune.gui.advice.second_tap_advice` (None when the bands are narrow).
+    """
     from taptune.identify import identify
 
-    return identify([analysis], [assembly], options, progress=progress)
+    result = identify(list(analyses), list(assemblies), options, progress=progress)
+    advice = second_tap_advice(result, assemblies[0], options.model) if len(analyses) == 1 else None
+    return result, advice
 
 
 class MainWindow(QMainWindow):
@@ -114,8 +134,12 @@ class MainWindow(QMainWindow):
         self.recording_path: str | None = None
         self.analysis = None
         self.expected_hz = None
+        self.analysed_assembly = None
         self.identification = None
-        self.identified = None  # (recording, assembly) the identification was made from
+        self.identified = None  # ([recordings], [assemblies]) the identification was made from
+        self.second: Take | None = None  # the recording at the 2nd stick-out, if any
+        self._second_seq = 0
+        self._second_loading = None
         self._loading = None
         self._analysis_seq = 0
         self._identify_task = None
@@ -123,6 +147,7 @@ class MainWindow(QMainWindow):
         self.assembly_panel = AssemblyPanel()
         self.recorder = RecorderPanel(self._assembly_for_recording, stream_factory=stream_factory, devices=devices)
         self.spectrum = SpectrumView()
+        self.spectrum2 = SpectrumView()
         self.fit = FitView()
         self.predictor = Predictor()
         self.library_view = LibraryView(library_path)
@@ -136,17 +161,23 @@ class MainWindow(QMainWindow):
         open_box.setWordWrap(True)
         open_box.setMaximumWidth(760)
         rl.addWidget(open_box)
+        self.record_second = QCheckBox("Record the 2nd stick-out (same holder and tool; set it on the left, "
+                                       "then both recordings are identified together)")
+        rl.addWidget(self.record_second)
         rl.addStretch(1)
 
         self.tabs = QTabWidget()
         self.tabs.addTab(record_tab, "1  Record")
-        self.tabs.addTab(self.spectrum, "2  Spectrum")
+        self.tabs.addTab(self._spectrum_page(), "2  Spectrum")
         self.tabs.addTab(self.fit, "3  Fit")
         self.tabs.addTab(self.predictor, "4  Predict")
         self.tabs.addTab(self.library_view, "Library")
 
         # The workflow bar: always visible, in the order of the job.
         self.open_button = QPushButton("Open recording…")
+        self.open2_button = QPushButton("Add 2nd stick-out…")
+        self.open2_button.setToolTip("Open a recording of the same holder and tool at another stick-out: "
+                                     "both are identified together, which narrows the predicted bands")
         self.identify_button = QPushButton("Identify holder")
         self.cancel_button = QPushButton("Cancel")
         self.save_button = QPushButton("Save to library")
@@ -157,11 +188,13 @@ class MainWindow(QMainWindow):
         self.file_label = QLabel("No recording")
         self.file_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
         self.open_button.clicked.connect(self._open_dialog)
+        self.open2_button.clicked.connect(self._open_second_dialog)
         self.identify_button.clicked.connect(self.start_identification)
         self.cancel_button.clicked.connect(self.cancel_identification)
         self.save_button.clicked.connect(self.save_to_library)
         bar = QHBoxLayout()
         bar.addWidget(self.open_button)
+        bar.addWidget(self.open2_button)
         bar.addWidget(self.file_label, 1)
         bar.addWidget(self.identify_button)
         bar.addWidget(self.progress, 1)
@@ -172,6 +205,9 @@ class MainWindow(QMainWindow):
         rv = QVBoxLayout(right)
         rv.setContentsMargins(0, 0, 0, 0)
         rv.addLayout(bar)
+        self.banner = Banner("Add 2nd stick-out…")
+        self.banner.action.connect(self._open_second_dialog)
+        rv.addWidget(self.banner)
         rv.addWidget(self.tabs, 1)
         scroll = QScrollArea()
         scroll.setWidget(self.assembly_panel)
@@ -191,7 +227,9 @@ class MainWindow(QMainWindow):
         self._reanalyse.setInterval(600)
         self._reanalyse.timeout.connect(self._reanalyse_now)
         self.assembly_panel.assembly_changed.connect(self._assembly_changed)
-        self.recorder.recorded.connect(self.load_recording)
+        self.recorder.recorded.connect(self._recorded)
+        self.assembly_panel.second_stickout_changed.connect(self._second_stickout_changed)
+        self.spectrum2.relabel_requested.connect(self.relabel_second_peak)
         self.recorder.status.connect(self.statusBar().showMessage)
         self.spectrum.relabel_requested.connect(self.relabel_peak)
         self.library_view.changed.connect(self.assembly_panel.reload_choices)
@@ -204,24 +242,58 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ helpers
 
+    def _spectrum_page(self) -> QWidget:
+        """Both spectra, one above the other; the second pane only while there is a 2nd recording."""
+        self.second_label = QLabel()
+        self.remove_second_button = QPushButton("Remove 2nd recording")
+        self.remove_second_button.clicked.connect(self.remove_second_recording)
+        head = QHBoxLayout()
+        head.setContentsMargins(0, 0, 0, 0)
+        head.addWidget(self.second_label, 1)
+        head.addWidget(self.remove_second_button)
+        self.second_pane = QWidget()
+        pane = QVBoxLayout(self.second_pane)
+        pane.setContentsMargins(0, 4, 0, 0)
+        pane.addLayout(head)
+        pane.addWidget(self.spectrum2, 1)
+        self.second_pane.setVisible(False)
+        self.spectrum_page = QSplitter(Qt.Vertical)
+        self.spectrum_page.addWidget(self.spectrum)
+        self.spectrum_page.addWidget(self.second_pane)
+        self.spectrum_page.setChildrenCollapsible(False)
+        return self.spectrum_page
+
     def show_view(self, name: str) -> None:
         """Bring one of :data:`VIEWS` to the front."""
         self.tabs.setCurrentIndex(VIEWS.index(name))
 
+    def _assemblies(self) -> list:
+        """The assembly of each recording to identify: the panel's, and the 2nd stick-out's."""
+        first = self.assembly_panel.assembly
+        if self.second is None or first is None:
+            return [first]
+        second, _problem = self.assembly_panel.second_assembly()
+        return [first, second]
+
     @property
     def busy(self) -> bool:
         """True while a recording is analysed or a holder identified."""
-        return self._loading is not None or self._identify_task is not None
-
-    def _assembly_for_recording(self):
-        return self.assembly_panel.assembly, self.assembly_panel.assembly_toml()
+        return (self._loading is not None or self._second_loading is not None
+                or self._identify_task is not None)
 
     def _update_actions(self) -> None:
         identifying = self._identify_task is not None
-        self.identify_button.setEnabled(self.analysis is not None and self.assembly_panel.assembly is not None
-                                        and not self.busy)
-        self.identify_button.setToolTip("" if self.assembly_panel.assembly is not None
-                                        else "Describe the assembly first (left)")
+        ready = self.analysis is not None and None not in self._assemblies()
+        self.identify_button.setEnabled(ready and not self.busy)
+        self.identify_button.setText("Identify jointly (2 recordings)" if self.second is not None
+                                     else "Identify holder")
+        if self.assembly_panel.assembly is None:
+            self.identify_button.setToolTip("Describe the assembly first (left)")
+        elif None in self._assemblies():
+            self.identify_button.setToolTip("2nd recording: " + self.assembly_panel.second_assembly()[1])
+        else:
+            self.identify_button.setToolTip("")
+        self.open2_button.setEnabled(self.analysis is not None and not identifying)
         self.cancel_button.setEnabled(identifying)
         self.save_button.setEnabled(self.identification is not None and not identifying)
         self.open_button.setEnabled(not identifying)
@@ -233,6 +305,129 @@ class MainWindow(QMainWindow):
                                               "Recordings (*.wav *.flac *.WAV *.FLAC)")
         if path:
             self.load_recording(path)
+
+    def _open_second_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open the recording at the 2nd stick-out",
+                                              str(Path(self.recording_path or Path.cwd() / "recordings").parent),
+                                              "Recordings (*.wav *.flac *.WAV *.FLAC)")
+        if path:
+            self.load_second_recording(path)
+
+    def _recorded(self, path: str) -> None:
+        if self.record_second.isChecked():
+            self.load_second_recording(path)
+        else:
+            self.load_recording(path)
+
+    def _assembly_for_recording(self):
+        if self.record_second.isChecked():
+            second, problem = self.assembly_panel.second_assembly()
+            if second is not None:
+                from taptune.io.assembly import assembly_to_toml
+
+                return second, assembly_to_toml(second)
+        return self.assembly_panel.assembly, self.assembly_panel.assembly_toml()
+
+    def load_second_recording(self, path: str) -> None:
+        """Read and analyse a recording of the same holder and tool at the 2nd stick-out.
+
+        Its stick-out comes from the assembly file beside it when that file has the panel's
+        holder and tool, else from the panel's "2nd stick-out" field.
+        """
+        from taptune.errors import InputError
+        from taptune.io.assembly import load_assembly
+
+        if self._identify_task is not None:
+            show_error(self, "Busy", "Wait for the identification to end (or cancel it) first.")
+            return
+        first = self.assembly_panel.assembly
+        if self.analysis is None or first is None:
+            show_error(self, "Open the first recording first",
+                       "The 2nd recording is the same holder and tool at another stick-out: open or record "
+                       "the first one and describe its assembly on the left.")
+            return
+        toml_path = sidecar_assembly(path)
+        if toml_path:
+            try:
+                beside = load_assembly(toml_path)
+            except InputError as err:
+                beside = None
+                show_error(self, "Cannot use the assembly file", f"{err}\nThe 2nd stick-out field is used instead.")
+            if beside is not None and (beside.holder, beside.tool) == (first.holder, first.tool):
+                self.assembly_panel.set_second_stickout_mm(round(beside.stickout / 1e-3, 3))
+            elif beside is not None:
+                show_error(self, "Different holder or tool",
+                           f"{toml_path} describes another holder or tool than the first recording; "
+                           "only its stick-out would be right for a joint fit. The 2nd stick-out field "
+                           "(left) is used.")
+        second, problem = self.assembly_panel.second_assembly()
+        if second is None:
+            show_error(self, "Set the 2nd stick-out", f"Cannot open the 2nd recording yet: {problem}.")
+            return
+        self._analyse_second(str(path), second)
+
+    def _analyse_second(self, path: str, assembly) -> None:
+        self.statusBar().showMessage(f"Analysing the 2nd recording {path}…")
+        self._second_seq += 1
+        seq = self._second_seq
+        self._second_loading = self.runner.start(
+            analyse_file, path, assembly, with_progress=False,
+            on_finished=lambda result: seq == self._second_seq and self._second_analysed(path, assembly, result),
+            on_failed=lambda message: seq == self._second_seq and self._analysis_failed(path, message, second=True),
+        )
+        self._update_actions()
+
+    def _second_analysed(self, path: str, assembly, result) -> None:
+        self._second_loading = None
+        recording, analysis, expected = result
+        self.second = Take(path, recording, analysis, expected, assembly)
+        self._show_second()
+        self.banner.hide()
+        self.show_view("spectrum")
+        self.statusBar().showMessage(f"2nd recording analysed: {analysis.n_taps} taps. Identify both together.")
+        self._update_file_label()
+        self._update_actions()
+        emit(self.analysis_ready, analysis)
+
+    def _show_second(self) -> None:
+        take = self.second
+        text = f"2nd recording: {Path(take.path).name} — stick-out {take.assembly.stickout * 1e3:g} mm"
+        self.second_label.setText("<b>Identified together with the recording above:</b> same holder and tool, "
+                                  f"stick-out {take.assembly.stickout * 1e3:g} mm")
+        self.spectrum2.show_analysis(take.analysis, text, take.expected_hz)
+        self.second_pane.setVisible(True)
+
+    def remove_second_recording(self) -> None:
+        """Forget the 2nd recording (the next identification uses the first alone)."""
+        if self._identify_task is not None:
+            return
+        self._second_seq += 1  # an analysis still running is ignored when it ends
+        self._second_loading = None
+        self.second = None
+        self.second_pane.setVisible(False)
+        self.spectrum2.clear("")
+        self._update_file_label()
+        self._update_actions()
+
+    def relabel_second_peak(self, index: int, kind: str, mode) -> None:
+        """Give peak ``index`` of the 2nd recording a new label."""
+        import dataclasses
+
+        if self.second is None or self._identify_task is not None:
+            return
+        self.second = dataclasses.replace(self.second, analysis=relabel(self.second.analysis, index, kind, mode))
+        self._show_second()
+
+    def _second_stickout_changed(self, _value: float) -> None:
+        # The labels of the 2nd recording follow the model at its stick-out: analyse it
+        # again once the edits settle.
+        if self.second is not None:
+            self._reanalyse.start()
+        self._update_actions()
+
+    def _update_file_label(self) -> None:
+        names = [Path(p).name for p in (self.recording_path, self.second and self.second.path) if p]
+        self.file_label.setText(" + ".join(names) or "No recording")
 
     def load_recording(self, path: str, assembly_path: str | None = None) -> None:
         """Read and analyse a recording in the background.
@@ -252,11 +447,12 @@ class MainWindow(QMainWindow):
             except InputError as err:
                 show_error(self, "Cannot use the assembly file", f"{err}\nThe assembly on the left is used instead.")
         self._reanalyse.stop()
+        self.remove_second_recording()  # a new first recording starts a new session
+        self.banner.hide()
         self._analyse(str(path))
 
     def _analyse(self, path: str) -> None:
         assembly = self.assembly_panel.assembly
-        self.file_label.setText(Path(path).name)
         self.statusBar().showMessage(f"Analysing {path}…")
         self._set_progress(None, "analysing the recording")
         # Only the latest request counts: an older analysis that ends later is ignored.
@@ -274,6 +470,8 @@ class MainWindow(QMainWindow):
         self._loading = None
         recording, analysis, expected = result
         self.recording, self.recording_path, self.analysis, self.expected_hz = recording, path, analysis, expected
+        self.analysed_assembly = assembly
+        self._update_file_label()
         self._set_progress(0, "")
         title = f"{Path(path).name}" + (f" — {assembly.holder.name}, stick-out {assembly.stickout * 1e3:g} mm"
                                         if assembly is not None else " — no assembly: bending labels are a guess")
@@ -283,8 +481,11 @@ class MainWindow(QMainWindow):
         self._update_actions()
         emit(self.analysis_ready, analysis)
 
-    def _analysis_failed(self, path: str, message: str) -> None:
-        self._loading = None
+    def _analysis_failed(self, path: str, message: str, second: bool = False) -> None:
+        if second:
+            self._second_loading = None
+        else:
+            self._loading = None
         self._set_progress(0, "")
         self.statusBar().showMessage(f"Could not analyse {path}", 10000)
         show_error(self, "Cannot analyse the recording", message)
@@ -312,22 +513,29 @@ class MainWindow(QMainWindow):
             return
         if self.busy:
             self._reanalyse.start()  # try again when the running job has ended
-        else:
+            return
+        if self.assembly_panel.assembly != self.analysed_assembly:
             self._analyse(self.recording_path)
+        second, _problem = self.assembly_panel.second_assembly()
+        if self.second is not None and second is not None and second != self.second.assembly:
+            self._analyse_second(self.second.path, second)
 
     # ------------------------------------------------------------------ identification
 
     def start_identification(self) -> None:
         """Fit the holder to the analysed recording in a worker thread (Cancel stops it)."""
-        assembly = self.assembly_panel.assembly
-        if self.analysis is None or assembly is None or self.busy:
+        assemblies = self._assemblies()
+        if self.analysis is None or None in assemblies or self.busy:
             return
         self._set_progress(0, "starting")
-        self.statusBar().showMessage("Identifying the holder… the window stays usable; Cancel stops it.")
-        recording = self.recording
+        self.banner.hide()
+        joint = " from both recordings" if len(assemblies) == 2 else ""
+        self.statusBar().showMessage(f"Identifying the holder{joint}… the window stays usable; Cancel stops it.")
+        takes = [self.analysis] + ([self.second.analysis] if len(assemblies) == 2 else [])
+        recordings = [self.recording] + ([self.second.recording] if len(assemblies) == 2 else [])
         self._identify_task = self.runner.start(
-            run_identification, self.analysis, assembly, self.identify_options,
-            on_finished=lambda result: self._identified(result, recording, assembly),
+            run_identification, takes, assemblies, self.identify_options,
+            on_finished=lambda result: self._identified(result, recordings, assemblies),
             on_failed=self._identification_failed,
             on_progress=self._set_progress,
             on_cancelled=self._identification_cancelled,
@@ -349,12 +557,17 @@ class MainWindow(QMainWindow):
             self.progress.setValue(int(round(1000 * max(0.0, min(1.0, fraction)))))
         self.progress.setFormat(message)
 
-    def _identified(self, result, recording, assembly) -> None:
+    def _identified(self, outcome, recordings, assemblies) -> None:
+        result, advice = outcome
+        assembly = assemblies[0]
         self._identify_task = None
         self.identification = result
-        self.identified = (recording, assembly)
+        self.identified = (recordings, assemblies)
         self._set_progress(1.0, "done")
-        self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model")
+        names = [f"{Path(r.path).name} ({a.stickout * 1e3:g} mm)" for r, a in zip(recordings, assemblies)]
+        self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model", names)
+        if advice:
+            self.banner.show_text(advice)
         self.predictor.set_source(PredictorSource(f"identified now ({assembly.holder.name})",
                                                   tuple(result.param_sets), assembly, self.identify_options.model,
                                                   result.relative_floor))
@@ -389,9 +602,9 @@ class MainWindow(QMainWindow):
 
         if self.identification is None:
             return None
-        recording, assembly = self.identified
+        recordings, assemblies = self.identified
         try:
-            entry = entry_from_identification(self.identification, [recording], [assembly],
+            entry = entry_from_identification(self.identification, recordings, assemblies,
                                               self.identify_options.model)
             HolderLibrary(self.library_view.library_path).put(entry)
         except (TaptuneError, OSError) as err:

@@ -32,9 +32,11 @@ def tap_sound(frequencies_hz, damping, amplitudes, onsets_s, seconds, fs=FS, noi
     return 0.5 * x / np.max(np.abs(x))
 
 
-@pytest.fixture(scope="session")
-def generated_recording(tmp_path_factory):
-    """A 5-tap WAV of the reference assembly (holder A) and its sidecar assembly file."""
+def write_recording(folder, stickout_mm: float, seed: int = 1):
+    """A 5-tap WAV of the reference assembly (holder A) at ``stickout_mm`` and its sidecar assembly file.
+
+    Returns ``(wav, toml, (f1, f2, f3) [Hz])``.
+    """
     import soundfile
 
     from taptune.io.assembly import load_assembly
@@ -42,16 +44,27 @@ def generated_recording(tmp_path_factory):
     from taptune.model.params import HolderParams
     from tests.conftest import REFERENCE_TOML
 
-    folder = tmp_path_factory.mktemp("recordings")
-    toml = folder / "er32_d16_53.5mm.toml"
-    toml.write_text(REFERENCE_TOML)
+    toml = folder / f"er32_d16_{stickout_mm:g}mm.toml"
+    toml.write_text(REFERENCE_TOML.replace("stickout = 53.5", f"stickout = {stickout_mm:g}"))
     assembly = load_assembly(toml)
     modes = solve_modes(build_model(assembly), HolderParams(**HOLDER_A), n_modes=3)
     x = tap_sound(modes.frequency_hz[:3], modes.damping_ratio[:3], (1.0, 0.5, 0.35),
-                  onsets_s=(0.3, 1.0, 1.7, 2.4, 3.1), seconds=3.8)
-    wav = folder / "er32_d16_53.5mm.wav"
+                  onsets_s=(0.3, 1.0, 1.7, 2.4, 3.1), seconds=3.8, seed=seed)
+    wav = toml.with_suffix(".wav")
     soundfile.write(wav, x, FS, subtype="PCM_24")
     return wav, toml, tuple(float(f) for f in modes.frequency_hz[:3])
+
+
+@pytest.fixture(scope="session")
+def generated_recording(tmp_path_factory):
+    """A 5-tap WAV of the reference assembly (holder A) at 53.5 mm and its sidecar assembly file."""
+    return write_recording(tmp_path_factory.mktemp("recordings"), 53.5)
+
+
+@pytest.fixture(scope="session")
+def second_recording(tmp_path_factory):
+    """The same holder and tool tapped at 63.5 mm (another folder: its own sidecar file)."""
+    return write_recording(tmp_path_factory.mktemp("recordings2"), 63.5, seed=2)
 
 
 @pytest.fixture

@@ -25,7 +25,7 @@ def test_open_identify_save_and_predict(qtbot, window, generated_recording, libr
     _load(qtbot, window, wav)
     # The assembly file beside the recording was loaded into the panel.
     assert window.assembly_panel.assembly.holder.name == "ER32 collet chuck HSK-A63 x 100"
-    assert window.tabs.currentWidget() is window.spectrum
+    assert window.tabs.currentWidget() is window.spectrum_page
     bending = window.analysis.bending_hz
     np.testing.assert_allclose(bending, true_hz, rtol=1e-3)
     assert window.identify_button.isEnabled()
