@@ -22,6 +22,7 @@ RANK = {
     "model": 3,
     "synthetic": 4,
     "identify": 4,
+    "machine": 4.5,  # the machine stage: uses io, model and identify
     "library": 5,
     "batch": 7,  # the headless batch front end (cmd_batch is its argument parser)
     "report": 6,

@@ -50,13 +50,19 @@ class Segment:
 
 @dataclass(frozen=True)
 class Holder:
-    """Tool holder: segments from the spindle-side end (z = 0) to the front face."""
+    """Tool holder: segments from the spindle-side end (z = 0) to the front face.
+
+    ``gauge_length`` [m] (optional) is the distance from the front face back to the
+    coupling plane where the holder meets the spindle (MACHINE.md); ``None`` lets the
+    interface decide (:func:`taptune.machine.coupling_plane`).
+    """
 
     name: str
     interface: str
     clamp_length: float
     segments: tuple[Segment, ...]
     material: Material = STEEL
+    gauge_length: float | None = None
 
     @property
     def length(self) -> float:
@@ -152,6 +158,57 @@ class Assembly:
         return 0.0
 
 
+def _check_material(m: Material, key: str, fail) -> None:
+    """Raise through ``fail(key, problem)`` when a material value is impossible."""
+    if not (m.density > 0 and math.isfinite(m.density)):
+        fail(f"{key}.density", f"must be > 0 kg/m³, got {m.density:g}")
+    if not (m.youngs_modulus > 0 and math.isfinite(m.youngs_modulus)):
+        fail(f"{key}.youngs_modulus", f"must be > 0 GPa, got {m.youngs_modulus / GPA:g}")
+    # Holder steels and carbide lie near 0.2-0.3; negative ratios (auxetic foams) are no
+    # tool material, and near -1 they break the shear coefficient of MODEL.md §3.2.
+    if not (0.0 <= m.poisson < 0.5):
+        fail(f"{key}.poisson", f"must lie in [0, 0.5), got {m.poisson:g}")
+    if not (0 <= m.loss_factor < 1):
+        fail(f"{key}.loss_factor", f"must lie in [0, 1), got {m.loss_factor:g}")
+
+
+def _check_segments(segs, label: str, fail) -> None:
+    for i, s in enumerate(segs, 1):
+        for name, value in (("length", s.length), ("od", s.od)):
+            if not (math.isfinite(value) and value > 0):
+                fail(f"{label}[{i}].{name}", f"must be > 0 mm, got {value / MM:g}")
+        if not (math.isfinite(s.id) and s.id >= 0):
+            fail(f"{label}[{i}].id", f"must be >= 0 mm, got {s.id / MM:g}")
+        if s.id >= s.od:
+            fail(f"{label}[{i}].id", f"must be smaller than od ({s.od / MM:g} mm), got {s.id / MM:g}")
+
+
+def validate_holder(h: Holder, src: str) -> Holder:
+    """Check a holder's own geometry (segments, clamp and gauge length, material).
+
+    Raises InputError naming ``src`` on an impossible value; returns ``h`` unchanged.
+    """
+
+    def fail(key: str, problem: str):
+        raise InputError(f"{src}: {key} {problem}")
+
+    if not h.segments:
+        fail("[holder] segments", "must list at least one segment")
+    _check_segments(h.segments, "[holder] segments", fail)
+    if not (math.isfinite(h.clamp_length) and h.clamp_length > 0):
+        fail("[holder] clamp_length", f"must be > 0 mm, got {h.clamp_length / MM:g}")
+    if h.clamp_length > h.length + TOL_M:
+        fail("[holder] clamp_length", f"({h.clamp_length / MM:g} mm) is longer than the holder ({h.length / MM:g} mm)")
+    g = h.gauge_length
+    if g is not None:
+        if not (math.isfinite(g) and g > 0):
+            fail("[holder] gauge_length", f"must be > 0 mm, got {g / MM:g}")
+        if g > h.length + TOL_M:
+            fail("[holder] gauge_length", f"({g / MM:g} mm) is longer than the holder ({h.length / MM:g} mm)")
+    _check_material(h.material, "[holder] material", fail)
+    return h
+
+
 def validate(asm: Assembly) -> Assembly:
     """Check the geometry rules of ASSEMBLY-FORMAT.md / MODEL.md §1.3.
 
@@ -164,35 +221,15 @@ def validate(asm: Assembly) -> Assembly:
     def fail(key: str, problem: str):
         raise InputError(f"{src}: {key} {problem}")
 
-    if not h.segments:
-        fail("[holder] segments", "must list at least one segment")
-    for label, segs in (("[holder] segments", h.segments), ("[tool] segments", t.segments)):
-        for i, s in enumerate(segs, 1):
-            for name, value in (("length", s.length), ("od", s.od)):
-                if not (math.isfinite(value) and value > 0):
-                    fail(f"{label}[{i}].{name}", f"must be > 0 mm, got {value / MM:g}")
-            if not (math.isfinite(s.id) and s.id >= 0):
-                fail(f"{label}[{i}].id", f"must be >= 0 mm, got {s.id / MM:g}")
-            if s.id >= s.od:
-                fail(f"{label}[{i}].id", f"must be smaller than od ({s.od / MM:g} mm), got {s.id / MM:g}")
+    validate_holder(h, src)
+    _check_segments(t.segments, "[tool] segments", fail)
     for key, value in (
-        ("[holder] clamp_length", h.clamp_length),
         ("[tool] total_length", t.total_length),
         ("[setup] stickout", asm.stickout),
     ):
         if not (math.isfinite(value) and value > 0):
             fail(key, f"must be > 0 mm, got {value / MM:g}")
-    for key, m in (("[holder] material", h.material), ("[tool] material", t.material)):
-        if not (m.density > 0 and math.isfinite(m.density)):
-            fail(f"{key}.density", f"must be > 0 kg/m³, got {m.density:g}")
-        if not (m.youngs_modulus > 0 and math.isfinite(m.youngs_modulus)):
-            fail(f"{key}.youngs_modulus", f"must be > 0 GPa, got {m.youngs_modulus / GPA:g}")
-        # Holder steels and carbide lie near 0.2-0.3; negative ratios (auxetic foams) are no
-        # tool material, and near -1 they break the shear coefficient of MODEL.md §3.2.
-        if not (0.0 <= m.poisson < 0.5):
-            fail(f"{key}.poisson", f"must lie in [0, 0.5), got {m.poisson:g}")
-        if not (0 <= m.loss_factor < 1):
-            fail(f"{key}.loss_factor", f"must lie in [0, 1), got {m.loss_factor:g}")
+    _check_material(t.material, "[tool] material", fail)
     seg_sum = sum(s.length for s in t.segments)
     if abs(seg_sum - t.total_length) > 0.01 * MM + TOL_M:
         fail("[tool] total_length", f"is {t.total_length / MM:g} mm but the tool segments add up to {seg_sum / MM:g} mm")
@@ -200,8 +237,6 @@ def validate(asm: Assembly) -> Assembly:
         fail("[setup] stickout", f"({asm.stickout / MM:g} mm) must be shorter than the tool ({t.total_length / MM:g} mm)")
     if asm.inserted_length > h.length + TOL_M:
         fail("[setup] stickout", f"leaves {asm.inserted_length / MM:g} mm of tool inside a holder only {h.length / MM:g} mm long")
-    if h.clamp_length > h.length + TOL_M:
-        fail("[holder] clamp_length", f"({h.clamp_length / MM:g} mm) is longer than the holder ({h.length / MM:g} mm)")
 
     warnings: list[str] = []
     # The tool must fit the bore along the whole inserted length.
@@ -291,6 +326,18 @@ class _Reader:
             loss_factor=self.number(m, "loss_factor", w, default.loss_factor),
         )
 
+    def holder(self, data: dict, where: str) -> Holder:
+        """A :class:`Holder` from its table (mm, GPa); not yet validated."""
+        gauge = self.number(data, "gauge_length", where) * MM if "gauge_length" in data else None
+        return Holder(
+            name=self.text(data, "name", where),
+            interface=self.text(data, "interface", where, "unknown"),
+            clamp_length=self.number(data, "clamp_length", where) * MM,
+            segments=self.segments(data, where),
+            material=self.material(data, where, STEEL),
+            gauge_length=gauge,
+        )
+
     def segments(self, data: dict, where: str) -> tuple[Segment, ...]:
         segs = data.get("segments")
         if not isinstance(segs, list) or not segs:
@@ -318,13 +365,7 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
     h = r.table(data, "holder")
     t = r.table(data, "tool")
     s = r.table(data, "setup")
-    holder = Holder(
-        name=r.text(h, "name", "[holder]"),
-        interface=r.text(h, "interface", "[holder]", "unknown"),
-        clamp_length=r.number(h, "clamp_length", "[holder]") * MM,
-        segments=r.segments(h, "[holder]"),
-        material=r.material(h, "[holder]", STEEL),
-    )
+    holder = r.holder(h, "[holder]")
     total = r.number(t, "total_length", "[tool]") * MM
     if "segments" in t:
         tool = Tool(
@@ -359,18 +400,38 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
     return validate(Assembly(holder=holder, tool=tool, stickout=stickout, source=source))
 
 
-def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
-    """Parse and validate the TOML text of an assembly file; errors name ``source``."""
+def _loads(text: str, source: str) -> dict:
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise InputError(f"{source}: not valid TOML ({err})") from None
-    return parse_assembly(data, source)
+
+
+def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
+    """Parse and validate the TOML text of an assembly file; errors name ``source``."""
+    return parse_assembly(_loads(text, source), source)
 
 
 def load_assembly(path: str | Path) -> Assembly:
     """Read and validate an assembly TOML file (ASSEMBLY-FORMAT.md)."""
     return assembly_from_toml(read_text(path, "an assembly file", "TOML"), str(path))
+
+
+def parse_holder(data: dict, source: str = "<holder>") -> Holder:
+    """A validated :class:`Holder` from TOML data holding a ``[holder]`` table (mm, GPa).
+
+    Other tables (``[tool]``, ``[setup]``) are ignored: a holder-only file describes, for
+    example, the dummy holder of an inverse-RCSA spindle measurement (MACHINE.md).
+    """
+    r = _Reader(source)
+    if not isinstance(data, dict):
+        r.fail("", "must be a TOML table")
+    return validate_holder(r.holder(r.table(data, "holder"), "[holder]"), source)
+
+
+def load_holder(path: str | Path) -> Holder:
+    """Read and validate a holder-only TOML file (the ``[holder]`` table of ASSEMBLY-FORMAT.md)."""
+    return parse_holder(_loads(read_text(path, "a holder file", "TOML"), str(path)), str(path))
 
 
 # --------------------------------------------------------------------------- writing
@@ -405,7 +466,8 @@ def holder_to_toml(holder: Holder) -> str:
         f"name = {_toml_str(holder.name)}\n"
         f"interface = {_toml_str(holder.interface)}\n"
         f"clamp_length = {_fmt(holder.clamp_length / MM)}\n"
-        f"{_material_line(holder.material)}\n"
+        + (f"gauge_length = {_fmt(holder.gauge_length / MM)}\n" if holder.gauge_length is not None else "")
+        + f"{_material_line(holder.material)}\n"
         f"segments = [\n{_seg_lines(holder.segments)}\n]\n"
     )
 
@@ -449,13 +511,16 @@ def segments_to_list(segments) -> list[dict]:
 
 def holder_to_dict(holder: Holder) -> dict:
     """Holder geometry as plain JSON-able data (mm, GPa), for the holder library."""
-    return {
+    out = {
         "name": holder.name,
         "interface": holder.interface,
         "clamp_length": holder.clamp_length / MM,
         "material": material_to_dict(holder.material),
         "segments": segments_to_list(holder.segments),
     }
+    if holder.gauge_length is not None:
+        out["gauge_length"] = holder.gauge_length / MM
+    return out
 
 
 def holder_from_dict(data: dict, source: str = "<library>") -> Holder:
@@ -463,10 +528,4 @@ def holder_from_dict(data: dict, source: str = "<library>") -> Holder:
     r = _Reader(source)
     if not isinstance(data, dict):
         r.fail("holder", "must be a table")
-    return Holder(
-        name=r.text(data, "name", "holder"),
-        interface=r.text(data, "interface", "holder", "unknown"),
-        clamp_length=r.number(data, "clamp_length", "holder") * MM,
-        segments=r.segments(data, "holder"),
-        material=r.material(data, "holder", STEEL),
-    )
+    return r.holder(data, "holder")

@@ -209,7 +209,7 @@ def _segments(value, src: str, key: str) -> list[dict]:
 
 def check_holder_dict(value, src: str, key: str = "holder") -> dict:
     """Validate holder geometry as written by :func:`taptune.io.assembly.holder_to_dict` (mm, GPa)."""
-    h = _object(value, src, key, ("name", "interface", "clamp_length", "material", "segments"))
+    h = _object(value, src, key, ("name", "interface", "clamp_length", "material", "segments"), ("gauge_length",))
     out = {
         "name": _text(h["name"], src, f"{key}.name", _MAX_NAME),
         "interface": _text(h["interface"], src, f"{key}.interface", _MAX_NAME),
@@ -220,6 +220,10 @@ def check_holder_dict(value, src: str, key: str = "holder") -> dict:
     length = sum(s["length"] for s in out["segments"])
     if out["clamp_length"] > length * (1 + 1e-9):
         _fail(src, f"{key}.clamp_length", f"({out['clamp_length']:g} mm) exceeds the holder length ({length:g} mm)")
+    if "gauge_length" in h:
+        out["gauge_length"] = _number(h["gauge_length"], src, f"{key}.gauge_length", 0.0)
+        if out["gauge_length"] > length * (1 + 1e-9):
+            _fail(src, f"{key}.gauge_length", f"({out['gauge_length']:g} mm) exceeds the holder length ({length:g} mm)")
     return out
 
 

@@ -1,0 +1,59 @@
+"""Named work materials with their cutting-force coefficients (for the lobes, MODEL.md §11).
+
+K_tc and K_rc are the tangential and radial shearing-force coefficients of the linear
+(mechanistic) milling force model, F_t = K_tc a h + K_te a, F_r = K_rc a h + K_re a; the
+zero-order lobes use K_tc and K_rc only. They depend on the tool (rake, helix, edge)
+and the feed range they were identified for, so treat them as starting values and
+prefer coefficients measured with your own tool.
+
+Signature::
+
+    MATERIALS: dict[str, CuttingCoefficients]     # keys are lower-case names
+    cutting_coefficients(name) -> CuttingCoefficients
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from taptune.errors import InputError
+
+MPA = 1e6
+
+
+@dataclass(frozen=True)
+class CuttingCoefficients:
+    """K_tc, K_rc [N/m²] of a work material, and where the values come from."""
+
+    name: str
+    ktc: float
+    krc: float
+    source: str
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "ktc_mpa": self.ktc / MPA, "krc_mpa": self.krc / MPA, "source": self.source}
+
+
+MATERIALS = {
+    c.name: c
+    for c in (
+        CuttingCoefficients(
+            "al6082", 902 * MPA, 243 * MPA,
+            "aluminium EN AW-6082, 12 mm 4-flute carbide end mill, 0.05 mm/tooth: the published cutting "
+            "data of the core method's validation (MODEL.md §11)",
+        ),
+        CuttingCoefficients(
+            "al7075", 796 * MPA, 0.212 * 796 * MPA,
+            "aluminium 7075-T6: K_t = 796 N/mm², K_r = 0.212 (Altintas & Budak, Analytical prediction of "
+            "stability lobes in milling, CIRP Annals 44(1), 1995)",
+        ),
+    )
+}
+
+
+def cutting_coefficients(name: str) -> CuttingCoefficients:
+    """The coefficients of a named material (case-insensitive); InputError lists the known names."""
+    key = name.strip().lower().replace("-", "").replace(" ", "")
+    if key not in MATERIALS:
+        raise InputError(f"unknown work material {name!r} (known: {', '.join(MATERIALS)}); give --ktc and --krc")
+    return MATERIALS[key]
