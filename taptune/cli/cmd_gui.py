@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-VIEWS = ("record", "spectrum", "fit", "predict", "library")
+VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library")
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -26,6 +26,8 @@ def add_parser(sub, name: str, help_text: str) -> None:
                         "gives the stick-out); both are identified together")
     p.add_argument("--library", metavar="PATH", help="holder library file")
     p.add_argument("--holder", metavar="NAME", help="open the predictor with this library holder (and the assembly's tool)")
+    p.add_argument("--machine", metavar="MACHINE_TOML",
+                   help="machine file for the Machine view (tool-point FRF and lobes; remembered)")
     p.add_argument("--screenshot", metavar="PNG", help="save a picture of the window to PNG and exit")
     p.add_argument("--size", type=_size, default=(1366, 768), metavar="WxH",
                    help="window size in pixels (default 1366x768)")
@@ -45,6 +47,10 @@ def run(args) -> int:
         from taptune.io.assembly import load_assembly
 
         load_assembly(args.assembly)  # a bad file is a one-line error before any window opens
+    if args.machine:
+        from taptune.io.machine import load_machine
+
+        load_machine(args.machine)
     if (args.view or args.identify) and not args.screenshot:
         raise InputError("--view and --identify only apply with --screenshot")
     holder = None
@@ -55,4 +61,4 @@ def run(args) -> int:
     from taptune.gui.app import run as run_app
 
     return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify,
-                   holder, second=args.second)
+                   holder, second=args.second, machine=args.machine)

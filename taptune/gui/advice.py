@@ -29,7 +29,7 @@ def widest_band(result, assembly, model_options=None, step_mm: float = STEP_MM):
     neighbouring stick-out fits the tool and holder.
     """
     from taptune.errors import InputError
-    from taptune.gui.predictor import stickout_range_mm
+    from taptune.gui.stickout import stickout_range_mm
     from taptune.identify import predict
 
     here = assembly.stickout / MM

@@ -82,6 +82,8 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
     if window.predictor.busy:
         wait_for(window.predictor.predicted, predictor_timeout_s)
+    if window.machine.busy:
+        wait_for(window.machine.updated, predictor_timeout_s)
     for _ in range(3):
         loop = QEventLoop()
         QTimer.singleShot(50, loop.quit)
@@ -89,11 +91,12 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
 
 def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
-        identify: bool = False, holder=None, second=None) -> int:
+        identify: bool = False, holder=None, second=None, machine=None) -> int:
     """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
 
     ``holder`` (a library entry) opens the predictor with it and the assembly's tool;
-    ``second`` is a recording at another stick-out, identified jointly with ``wav``.
+    ``second`` is a recording at another stick-out, identified jointly with ``wav``;
+    ``machine`` a machine file for the Machine view (remembered unless taking a screenshot).
 
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
@@ -109,6 +112,8 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     from taptune.library import default_library_path
 
     window = MainWindow(default_library_path(library))
+    if machine:
+        window.machine.load_machine(str(machine), remember=not screenshot)
     previous_hook = sys.excepthook
     install_excepthook(window)
     try:

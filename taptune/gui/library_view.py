@@ -64,10 +64,13 @@ class LibraryView(QWidget):
         The entries after any change (also after opening another library).
     use_for_prediction(object)
         The chosen :class:`~taptune.library.HolderEntry`.
+    use_on_machine(object)
+        The chosen entry, for the Machine view (lobes with the panel's tool and stick-out).
     """
 
     changed = Signal(dict)
     use_for_prediction = Signal(object)
+    use_on_machine = Signal(object)
 
     def __init__(self, library_path, parent=None):
         super().__init__(parent)
@@ -90,6 +93,7 @@ class LibraryView(QWidget):
         row = QHBoxLayout()
         for key, text, slot in (
             ("predict", "Use for prediction", self._use),
+            ("machine", "Lobes on the machine", self._use_on_machine),
             ("import", "Import…", self._import_dialog),
             ("export", "Export…", self._export_dialog),
             ("remove", "Remove…", self._remove_dialog),
@@ -165,7 +169,7 @@ class LibraryView(QWidget):
 
     def _update_buttons(self) -> None:
         has = self.selected() is not None
-        for key in ("predict", "remove"):
+        for key in ("predict", "machine", "remove"):
             self.buttons[key].setEnabled(has)
         self.buttons["export"].setEnabled(bool(self.entries))
 
@@ -175,6 +179,11 @@ class LibraryView(QWidget):
         entry = self.selected()
         if entry is not None:
             emit(self.use_for_prediction, entry)
+
+    def _use_on_machine(self) -> None:
+        entry = self.selected()
+        if entry is not None:
+            emit(self.use_on_machine, entry)
 
     def export_to(self, path, format: str | None = None) -> int | None:
         """Export the library (JSON or CSV from the suffix); a dialog reports the outcome."""

@@ -32,6 +32,7 @@ from taptune.gui.advice import Banner, second_tap_advice
 from taptune.gui.assembly_panel import AssemblyPanel
 from taptune.gui.fit_view import FitView
 from taptune.gui.library_view import LibraryView
+from taptune.gui.machine_view import MachineView
 from taptune.gui.messages import show_error
 from taptune.gui.predictor import Predictor, PredictorSource
 from taptune.gui.recorder_panel import RecorderPanel
@@ -40,7 +41,7 @@ from taptune.gui.spectrum_view import SpectrumView, relabel
 from taptune.gui.workers import TaskRunner
 
 AUDIO_SUFFIXES = (".wav", ".flac")
-VIEWS = ("record", "spectrum", "fit", "predict", "library")
+VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library")
 
 
 def sidecar_assembly(path) -> str | None:
@@ -110,6 +111,8 @@ class MainWindow(QMainWindow):
         safe), the standard optimiser budget.
     stream_factory, devices : optional
         Passed to the recording panel (tests use a fake input stream).
+    settings : QSettings, optional
+        Where choices are remembered (the machine file); default: the user's settings.
     """
 
     analysis_ready = Signal(object)
@@ -118,7 +121,8 @@ class MainWindow(QMainWindow):
     saved_to_library = Signal(str)
     load_failed = Signal(str)
 
-    def __init__(self, library_path, identify_options=None, stream_factory=None, devices=None, parent=None):
+    def __init__(self, library_path, identify_options=None, stream_factory=None, devices=None, settings=None,
+                 parent=None):
         super().__init__(parent)
         from taptune import __version__
 
@@ -150,6 +154,7 @@ class MainWindow(QMainWindow):
         self.spectrum2 = SpectrumView()
         self.fit = FitView()
         self.predictor = Predictor()
+        self.machine = MachineView(settings)
         self.library_view = LibraryView(library_path)
 
         record_tab = QWidget()
@@ -171,6 +176,7 @@ class MainWindow(QMainWindow):
         self.tabs.addTab(self._spectrum_page(), "2  Spectrum")
         self.tabs.addTab(self.fit, "3  Fit")
         self.tabs.addTab(self.predictor, "4  Predict")
+        self.tabs.addTab(self.machine, "5  Machine")
         self.tabs.addTab(self.library_view, "Library")
 
         # The workflow bar: always visible, in the order of the job.
@@ -234,6 +240,7 @@ class MainWindow(QMainWindow):
         self.spectrum.relabel_requested.connect(self.relabel_peak)
         self.library_view.changed.connect(self.assembly_panel.reload_choices)
         self.library_view.use_for_prediction.connect(self.use_library_entry)
+        self.library_view.use_on_machine.connect(self.use_library_entry_on_machine)
         self.predictor.failed.connect(lambda m: self.statusBar().showMessage(f"Prediction: {m}", 8000))
         self.assembly_panel.reload_choices(self.library_view.entries)
         self._update_actions()
@@ -568,9 +575,9 @@ class MainWindow(QMainWindow):
         self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model", names)
         if advice:
             self.banner.show_text(advice)
-        self.predictor.set_source(PredictorSource(f"identified now ({assembly.holder.name})",
-                                                  tuple(result.param_sets), assembly, self.identify_options.model,
-                                                  result.relative_floor))
+        self.set_holder_source(PredictorSource(f"identified now ({assembly.holder.name})",
+                                               tuple(result.param_sets), assembly, self.identify_options.model,
+                                               result.relative_floor))
         self.show_view("fit")
         self.statusBar().showMessage(
             f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
@@ -631,9 +638,20 @@ class MainWindow(QMainWindow):
             show_error(self, "Cannot use this holder with this tool", str(err))
             return
         sets = tuple(entry.prediction_sets())
-        self.predictor.set_source(PredictorSource(f"library ({entry.name})", sets, assembly, options,
-                                                  entry.relative_floor()))
-        self.show_view("predict")
+        self.set_holder_source(PredictorSource(f"library ({entry.name})", sets, assembly, options,
+                                               entry.relative_floor()))
+        if self.tabs.currentWidget() is not self.machine:
+            self.show_view("predict")
+
+    def use_library_entry_on_machine(self, entry) -> None:
+        """Lobes of a library holder with the panel's tool and stick-out (the Machine view)."""
+        self.show_view("machine")
+        self.use_library_entry(entry)
+
+    def set_holder_source(self, source) -> None:
+        """The holder parameters and assembly the predictor and the machine view work with."""
+        self.predictor.set_source(source)
+        self.machine.set_source(source)
 
     def _retarget_predictor(self, assembly) -> None:
         """The predictor follows the panel's tool; its holder stays the one its parameters belong to."""
@@ -647,8 +665,8 @@ class MainWindow(QMainWindow):
         except InputError as err:
             self.statusBar().showMessage(f"Prediction keeps the previous tool: {err}", 10000)
             return
-        self.predictor.set_source(PredictorSource(source.label, source.param_sets, moved, source.model_options,
-                                                  source.relative_floor))
+        self.set_holder_source(PredictorSource(source.label, source.param_sets, moved, source.model_options,
+                                               source.relative_floor))
 
     # ------------------------------------------------------------------ drag and drop, closing
 
@@ -683,5 +701,6 @@ class MainWindow(QMainWindow):
         # Stop the workers before Qt tears the window down; recordings are on disk already.
         self.recorder.shutdown()
         self.predictor.shutdown()
+        self.machine.shutdown()
         self.runner.shutdown()
         super().closeEvent(event)

@@ -13,17 +13,17 @@ from dataclasses import dataclass
 
 import numpy as np
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QTableWidgetItem, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
+from taptune.gui.latest import LatestOnly
 from taptune.gui.layout import read_only_table
 from taptune.gui.plotting import BENDING, MEASURED, PlotCanvas
 from taptune.gui.signals import emit
-from taptune.gui.workers import TaskRunner
+from taptune.gui.stickout import StickoutSlider
 
 MM = 1e-3
 # Receptance plot grid [Hz]: up to 25 kHz covers f1–f3 of usual assemblies.
 FREQ_HZ = np.linspace(20.0, 25000.0, 2500)
-SLIDER_STEPS_PER_MM = 10
 
 
 @dataclass(frozen=True)
@@ -49,14 +49,6 @@ def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ
     return stickout_mm, prediction, np.asarray(h)
 
 
-def stickout_range_mm(assembly) -> tuple[float, float]:
-    """Stick-outs the slider offers [mm]: from the holder's depth to 5 mm of grip left."""
-    total = assembly.tool.total_length / MM
-    lo = max(1.0, total - assembly.holder.length / MM + 0.1)
-    hi = max(lo + 1.0, total - 5.0)
-    return float(np.ceil(lo)), float(np.floor(hi))
-
-
 class Predictor(QWidget):
     """Predicted bending frequencies and tip receptance at any stick-out.
 
@@ -73,24 +65,13 @@ class Predictor(QWidget):
         super().__init__(parent)
         self.source: PredictorSource | None = None
         self.prediction = None
-        self._runner = TaskRunner(self)
-        self._running = False
-        self._pending: float | None = None
+        self._updates = LatestOnly(self._done, self._failed, self)
 
         self.source_label = QLabel()
         self.source_label.setWordWrap(True)
-        self.slider = QSlider(Qt.Horizontal)
-        self.spin = QDoubleSpinBox()
-        self.spin.setDecimals(1)
-        self.spin.setSuffix(" mm")
-        self.spin.setSingleStep(0.5)
-        self.spin.setKeyboardTracking(False)
-        self.slider.valueChanged.connect(lambda v: self.spin.setValue(v / SLIDER_STEPS_PER_MM))
-        self.spin.valueChanged.connect(self._spin_changed)
-        row = QHBoxLayout()
-        row.addWidget(QLabel("Stick-out"))
-        row.addWidget(self.slider, 1)
-        row.addWidget(self.spin)
+        self.stickout = StickoutSlider()
+        self.stickout.changed.connect(self.request)
+        self.slider, self.spin = self.stickout.slider, self.stickout.spin
 
         self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ % (± spread)"])
         self.table.setMinimumWidth(420)
@@ -110,7 +91,7 @@ class Predictor(QWidget):
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.source_label)
-        layout.addLayout(row)
+        layout.addWidget(self.stickout)
         layout.addLayout(numbers)
         layout.addWidget(self.canvas, 1)
         self.set_source(None)
@@ -119,68 +100,37 @@ class Predictor(QWidget):
         """Use ``source`` (None: nothing to predict yet) and predict at its stick-out."""
         self.source = source
         enabled = source is not None
-        self.slider.setEnabled(enabled)
-        self.spin.setEnabled(enabled)
+        self.stickout.setEnabled(enabled)
         if source is None:
             self.source_label.setText("Identify a holder, or pick one in the Library tab, to predict other stick-outs.")
             self.canvas.message("No holder parameters yet.")
             self.table.clearContents()
             return
         self.source_label.setText(f"Holder parameters: {source.label}. Tool: {source.assembly.tool.name}.")
-        lo, hi = stickout_range_mm(source.assembly)
+        self.stickout.set_assembly(source.assembly)
         current = source.assembly.stickout / MM
-        for w in (self.slider, self.spin):
-            w.blockSignals(True)
-        self.slider.setRange(int(lo * SLIDER_STEPS_PER_MM), int(hi * SLIDER_STEPS_PER_MM))
-        self.spin.setRange(lo, hi)
-        self.spin.setValue(current)
-        self.slider.setValue(int(round(current * SLIDER_STEPS_PER_MM)))
-        for w in (self.slider, self.spin):
-            w.blockSignals(False)
         self.request(current)
 
     def set_stickout_mm(self, value: float) -> None:
         """Move the stick-out (as the user would with the field)."""
-        self.spin.setValue(value)
-
-    def _spin_changed(self, value: float) -> None:
-        self.slider.blockSignals(True)
-        self.slider.setValue(int(round(value * SLIDER_STEPS_PER_MM)))
-        self.slider.blockSignals(False)
-        self.request(value)
+        self.stickout.set_value(value)
 
     def request(self, stickout_mm: float) -> None:
         """Predict at ``stickout_mm``; while a prediction runs, keep only the latest request."""
-        if self.source is None:
-            return
-        if self._running:
-            self._pending = stickout_mm
-            return
-        self._running = True
-        self._runner.start(compute_prediction, self.source, stickout_mm, with_progress=False,
-                           on_finished=self._done, on_failed=self._failed)
+        if self.source is not None:
+            self._updates.request(compute_prediction, self.source, stickout_mm)
 
     @property
     def busy(self) -> bool:
-        return self._running or self._pending is not None
-
-    def _next(self) -> None:
-        self._running = False
-        if self._pending is not None:
-            value, self._pending = self._pending, None
-            self.request(value)
+        return self._updates.busy
 
     def _failed(self, message: str) -> None:
         self.canvas.message(f"Cannot predict here:\n{message}")
         self.table.clearContents()
         emit(self.failed, message)
-        self._next()
 
     def _done(self, result) -> None:
-        stickout_mm, prediction, h = result
-        if self._pending is None:
-            self._show(stickout_mm, prediction, h)
-        self._next()
+        self._show(*result)
 
     def _show(self, stickout_mm: float, prediction, h) -> None:
         self.prediction = prediction
@@ -216,5 +166,4 @@ class Predictor(QWidget):
         emit(self.predicted, prediction)
 
     def shutdown(self) -> None:
-        self._pending = None
-        self._runner.shutdown()
+        self._updates.shutdown()

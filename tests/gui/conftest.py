@@ -94,11 +94,19 @@ def _clear_messages():
 
 
 @pytest.fixture
-def window(qtbot, library_path, fast_identify_options):
+def settings(tmp_path):
+    """Settings in a temporary INI file (the user's own are never touched)."""
+    from PySide6.QtCore import QSettings
+
+    return QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat)
+
+
+@pytest.fixture
+def window(qtbot, library_path, fast_identify_options, settings):
     """The real main window at laptop size, with no audio device."""
     from taptune.gui.main_window import MainWindow
 
-    win = MainWindow(library_path, identify_options=fast_identify_options, devices=lambda: [])
+    win = MainWindow(library_path, identify_options=fast_identify_options, devices=lambda: [], settings=settings)
     qtbot.addWidget(win)
     win.resize(1366, 768)
     win.show()
