@@ -22,6 +22,7 @@ from PySide6.QtWidgets import (
     QCheckBox,
     QPushButton,
     QScrollArea,
+    QSizePolicy,
     QSplitter,
     QTabWidget,
     QVBoxLayout,
@@ -193,6 +194,10 @@ class MainWindow(QMainWindow):
         self.progress.setFormat("")
         self.file_label = QLabel("No recording")
         self.file_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        # Two long file names must not widen the window past a laptop screen: the label
+        # gives way (the tooltip has the names in full).
+        self.file_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+        self.file_label.setMinimumWidth(120)
         self.open_button.clicked.connect(self._open_dialog)
         self.open2_button.clicked.connect(self._open_second_dialog)
         self.identify_button.clicked.connect(self.start_identification)
@@ -292,8 +297,7 @@ class MainWindow(QMainWindow):
         identifying = self._identify_task is not None
         ready = self.analysis is not None and None not in self._assemblies()
         self.identify_button.setEnabled(ready and not self.busy)
-        self.identify_button.setText("Identify jointly (2 recordings)" if self.second is not None
-                                     else "Identify holder")
+        self.identify_button.setText("Identify both together" if self.second is not None else "Identify holder")
         if self.assembly_panel.assembly is None:
             self.identify_button.setToolTip("Describe the assembly first (left)")
         elif None in self._assemblies():
@@ -435,6 +439,7 @@ class MainWindow(QMainWindow):
     def _update_file_label(self) -> None:
         names = [Path(p).name for p in (self.recording_path, self.second and self.second.path) if p]
         self.file_label.setText(" + ".join(names) or "No recording")
+        self.file_label.setToolTip("\n".join(p for p in (self.recording_path, self.second and self.second.path) if p))
 
     def load_recording(self, path: str, assembly_path: str | None = None) -> None:
         """Read and analyse a recording in the background.

@@ -32,7 +32,7 @@ def test_second_recording_is_identified_jointly_and_saved(qtbot, window, generat
     assert window.second_pane.isVisible() and window.spectrum2.analysis is window.second.analysis
     np.testing.assert_allclose(window.second.analysis.bending_hz, hz2, rtol=1e-3)
     assert window.file_label.text() == f"{wav1.name} + {wav2.name}"
-    assert window.identify_button.text().startswith("Identify jointly")
+    assert window.identify_button.text() == "Identify both together"
 
     with qtbot.waitSignal(window.identification_ended, timeout=120000) as blocker:
         window.start_identification()
