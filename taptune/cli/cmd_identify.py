@@ -10,7 +10,7 @@ def add_parser(sub, name, help_text):
         "Find the taps, label the bending peaks, fit the holder's contact parameters and store "
         "the holder in the library. Several recordings of one holder (other tools or stick-outs) "
         "are fitted jointly: give one --assembly per recording, in the same order."))
-    p.add_argument("wav", nargs="+", help="tap recording(s), WAV or FLAC")
+    p.add_argument("wav", nargs="+", help="tap recording(s): WAV, FLAC, MP3, Ogg/Opus, M4A/AAC or a phone video")
     p.add_argument("--assembly", action="append", required=True, metavar="FILE",
                    help="assembly TOML (once for all recordings, or once per recording)")
     p.add_argument("--library", metavar="PATH", help="holder library file (default: $TAPTUNE_LIBRARY or the user data folder)")

@@ -12,6 +12,8 @@ import argparse
 import sys
 from datetime import datetime
 
+#: ``library show`` lists this many of the latest checks.
+SHOW_CHECKS = 5
 LIBRARY_HELP = "holder library file (default: $TAPTUNE_LIBRARY, else the user data folder)"
 
 
@@ -29,7 +31,7 @@ def add_parser(sub, name: str, help_text: str) -> argparse.ArgumentParser:
     a = action("list", "list the holders: interface, stiffnesses, identifications")
     a.add_argument("--json", metavar="OUT", help="also write the list as JSON ('-' for stdout only)")
 
-    a = action("show", "one holder: parameters with spread, history, predicted bending modes")
+    a = action("show", "one holder: parameters with spread, history, last checks, predicted bending modes")
     a.add_argument("name", metavar="NAME", help="holder name")
     a.add_argument("--no-predict", action="store_true", help="skip the model predictions at the identified stick-outs")
     a.add_argument("--json", metavar="OUT", help="also write the holder as JSON ('-' for stdout only)")
@@ -157,6 +159,14 @@ def _show_lines(lib, entry, predictions) -> list[str]:
             f"      seed {r.seed}, {r.evaluations} evaluations, objective {r.objective:.4g}, taptune {r.taptune_version}; "
             f"f measured [Hz] {_hz(r.bending_measured_hz)}, model {_hz(r.bending_model_hz)}"
         )
+    if entry.checks:
+        shown = entry.checks[-SHOW_CHECKS:]
+        more = f", the last {len(shown)}" if len(shown) < len(entry.checks) else ""
+        lines.append(f"checks by one tap ({len(entry.checks)}{more})")
+        for c in shown:
+            modes = ", ".join(f"f{m['mode']} {'-' if m['measured_hz'] is None else format(m['measured_hz'], '.1f')} "
+                              f"vs {m['predicted_hz']:.1f} ± {m['band_hz']:.1f}" for m in c.modes)
+            lines.append(f"  {_date(c.date)}  {c.verdict:<12}  {c.recording}  tool '{c.tool}' at {c.stickout_mm:g} mm: {modes} Hz")
     if predictions is not None:
         lines.append("predicted bending modes (± half-width of the band of the near-optimal sets, as taptune predict)")
         if not predictions:

@@ -11,7 +11,7 @@ def add_parser(sub, name, help_text):
         "bending (modes 1-3), local (the spindle interface's own modes) or other. Without "
         "--assembly the bending labels are a best guess; with it, the model of the assembly "
         "guides them."))
-    p.add_argument("wav", help="tap recording, WAV or FLAC")
+    p.add_argument("wav", help="tap recording: WAV, FLAC, MP3, Ogg/Opus, M4A/AAC or a phone video")
     p.add_argument("--assembly", metavar="FILE", help="assembly TOML: the model guides the bending labels")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     p.add_argument("--plot", metavar="PNG", help="write a picture of the spectrum and the labeled peaks")

@@ -1,4 +1,9 @@
-"""Audio files: read any WAV/FLAC soundfile understands into a checked :class:`Recording`.
+"""Audio files: WAV, FLAC, MP3, Ogg and phone recordings (M4A/AAC, MP4/MOV video) into a checked :class:`Recording`.
+
+libsndfile (through soundfile) reads WAV, FLAC, MP3 and Ogg Vorbis/Opus exactly and fast;
+it cannot read AAC, the codec of most phone recorders and of phone video. Those go
+through PyAV (``av``, FFmpeg's decoders bundled in its wheels, imported lazily), which is
+also the fallback for any file libsndfile does not recognise.
 
 Every file we cannot use ends in :class:`~taptune.errors.InputError` with a one-line
 message naming the file and the problem (missing, empty, truncated, not audio, no
@@ -20,6 +25,20 @@ from taptune.errors import InputError
 # exceeds 0.9 x Nyquist (MODEL.md §8.3).
 MIN_SAMPLE_RATE = 8000
 
+#: Files that go straight to PyAV: AAC in MPEG-4/QuickTime/3GPP containers (phone voice
+#: memos and video), raw ADTS AAC, WebM/Matroska audio.
+AV_SUFFIXES = (".m4a", ".aac", ".mp4", ".mov", ".3gp", ".3g2", ".m4v", ".webm", ".mkv", ".mka")
+#: Every suffix read_audio is meant for (soundfile's common ones, then PyAV's).
+AUDIO_SUFFIXES = (".wav", ".flac", ".mp3", ".ogg", ".oga", ".opus") + AV_SUFFIXES
+
+# Lossy codecs by the names soundfile and FFmpeg give them: their encoders low-pass.
+_LOSSY = {"MPEG_LAYER_III": "mp3", "MPEG_LAYER_II": "mp2", "MPEG_LAYER_I": "mp1",
+          "VORBIS": "vorbis", "OPUS": "opus"}
+_LOSSY_AV = ("aac", "mp3", "mp2", "opus", "vorbis", "amr_nb", "amr_wb", "ac3", "eac3")
+# FFmpeg sample formats (packed or planar "p") -> scale to [-1, 1] and the soundfile-style subtype.
+_AV_FORMATS = {"u8": (None, "PCM_U8"), "s16": (2.0**15, "PCM_16"), "s32": (2.0**31, "PCM_32"),
+               "s64": (2.0**63, "PCM_64"), "flt": (1.0, "FLOAT"), "dbl": (1.0, "DOUBLE")}
+
 
 @dataclass(frozen=True)
 class Recording:
@@ -34,8 +53,9 @@ class Recording:
     path : str
         Where it came from ("" for synthesised recordings).
     subtype : str
-        soundfile subtype (``"PCM_16"``, ``"PCM_24"``, ``"FLOAT"`` …); it tells the
-        analysis what full scale means for clipping.
+        soundfile subtype (``"PCM_16"``, ``"PCM_24"``, ``"FLOAT"``, ``"MPEG_LAYER_III"``,
+        ``"OPUS"`` …) or, for files PyAV decoded, FFmpeg's codec name (``"aac"``) or the
+        PCM subtype it maps to; it tells the analysis what full scale means for clipping.
     """
 
     samples: np.ndarray
@@ -57,6 +77,16 @@ class Recording:
     def duration_s(self) -> float:
         """Length [s]."""
         return self.n_samples / float(self.sample_rate)
+
+    @property
+    def codec(self) -> str:
+        """Short codec name: ``"aac"``, ``"mp3"``, ``"opus"``, ``"vorbis"``, else the subtype."""
+        return _LOSSY.get(self.subtype.upper(), self.subtype)
+
+    @property
+    def lossy(self) -> bool:
+        """Whether a perceptual codec made the samples (its encoder low-passes, see signal.bandwidth)."""
+        return self.subtype.upper() in _LOSSY or self.subtype in _LOSSY_AV
 
     @property
     def name(self) -> str:
@@ -108,7 +138,11 @@ def make_recording(samples, sample_rate, path="", subtype="FLOAT") -> Recording:
 
 
 def read_audio(path) -> Recording:
-    """Read a WAV/FLAC/any libsndfile format into a :class:`Recording`.
+    """Read a tap recording: WAV, FLAC, MP3, Ogg Vorbis/Opus, M4A/AAC or the audio of a video.
+
+    soundfile (libsndfile) reads its formats exactly; ``.m4a``, ``.aac``, ``.mp4``,
+    ``.mov``, ``.3gp``, ``.webm`` … (:data:`AV_SUFFIXES`), and any file libsndfile does
+    not recognise, are decoded with PyAV. Samples keep the file's own rate and channels.
 
     Parameters
     ----------
@@ -123,8 +157,8 @@ def read_audio(path) -> Recording:
     Raises
     ------
     InputError
-        Missing, a folder, empty, truncated, not audio, no samples, NaN/Inf samples,
-        or a sample rate too low for the frequencies of interest.
+        Missing, a folder, empty, truncated, not audio, no audio stream, no samples,
+        NaN/Inf samples, or a sample rate too low for the frequencies of interest.
     """
     import soundfile as sf
 
@@ -140,6 +174,9 @@ def read_audio(path) -> Recording:
         raise InputError(f"{name}: cannot read ({err.strerror or err})") from None
     if size == 0:
         raise InputError(f"{name}: the file is empty")
+    if p.suffix.lower() in AV_SUFFIXES:
+        data, rate, subtype = _read_av(p, name)
+        return make_recording(data, rate, path=name, subtype=subtype)
     try:
         with sf.SoundFile(str(p)) as f:
             subtype = f.subtype
@@ -147,10 +184,65 @@ def read_audio(path) -> Recording:
             data = f.read(dtype="float64", always_2d=True)
     except (sf.LibsndfileError, RuntimeError, ValueError, TypeError, EOFError) as err:
         detail = " ".join(str(err).split()) or type(err).__name__
-        raise InputError(f"{name}: not a readable audio file ({detail})") from None
+        message = f"{name}: not a readable audio file ({detail})"
+        if "not recognised" not in detail.lower():
+            raise InputError(message) from None
+        # A phone file with a misleading suffix: FFmpeg may know it; if not, libsndfile's
+        # message is the one to show.
+        try:
+            data, rate, subtype = _read_av(p, name)
+        except InputError:
+            raise InputError(message) from None
     except OSError as err:
         raise InputError(f"{name}: cannot read ({err.strerror or err})") from None
     return make_recording(data, rate, path=name, subtype=subtype)
+
+
+def _read_av(p: Path, name: str):
+    """Decode the first audio stream of ``p`` with PyAV: (samples (n, ch) float64, rate, subtype)."""
+    try:
+        import av
+    except ImportError:
+        raise InputError(f"{name}: reading {p.suffix or 'this'} files needs PyAV (pip install av)") from None
+    try:
+        with av.open(str(p), mode="r") as container:
+            if not container.streams.audio:
+                what = "a video without sound" if container.streams.video else "no audio stream"
+                raise InputError(f"{name}: {what}; nothing to analyse")
+            stream = container.streams.audio[0]
+            # FFmpeg names its floating-point MP3 decoder "mp3float"; the codec is MP3.
+            codec = {"mp3float": "mp3"}.get(stream.codec_context.name, stream.codec_context.name)
+            chunks, rate, fmt = [], None, None
+            for frame in container.decode(stream):
+                chunks.append(_frame_samples(frame))
+                rate = rate or frame.sample_rate
+                fmt = fmt or frame.format.name.rstrip("p")
+    except InputError:
+        raise
+    except (av.error.FFmpegError, ValueError, OSError, EOFError) as err:
+        # FFmpeg's own words ("Invalid data found when processing input"), without its errno.
+        detail = " ".join(str(getattr(err, "strerror", None) or err).split()) or type(err).__name__
+        raise InputError(f"{name}: not a readable audio file ({detail})") from None
+    if not chunks or not sum(c.shape[0] for c in chunks):
+        raise InputError(f"{name}: the file holds no audio samples")
+    if len({c.shape[1] for c in chunks}) > 1:
+        raise InputError(f"{name}: the number of channels changes within the file")
+    data = np.concatenate(chunks, axis=0)
+    pcm = codec.startswith("pcm_")
+    return data, int(rate or stream.rate), (_AV_FORMATS.get(fmt, (None, codec))[1] if pcm else codec)
+
+
+def _frame_samples(frame) -> np.ndarray:
+    """One decoded PyAV frame as (n, channels) float64 in [-1, 1]."""
+    x = frame.to_ndarray()
+    channels = frame.layout.nb_channels
+    fmt = frame.format
+    # Planar formats come as (channels, n), packed ones as (1, n * channels).
+    x = x.T if fmt.is_planar else x.reshape(-1, channels)
+    scale = _AV_FORMATS.get(fmt.name.rstrip("p"), (1.0, ""))[0]
+    if scale is None:  # unsigned 8 bit, centred on 128
+        return (x.astype(np.float64) - 128.0) / 128.0
+    return x.astype(np.float64) / scale
 
 
 def write_audio(path, samples, sample_rate: int, subtype: str = "PCM_24") -> None:

@@ -21,7 +21,11 @@ holder parameters in library units, see :mod:`taptune.model.params`)::
                           "stickout_mm", "date": "2026-11-22T12:38:49Z", "objective",
                           "seed": int | null, "evaluations",
                           "bending_measured_hz": [f1, null, f3], "bending_model_hz": [...],
-                          "taptune_version"}, ...]}
+                          "taptune_version"}, ...],
+     "checks": [{"date", "recording", "sha256", "tool": "<tool name>", "stickout_mm",  # optional
+                 "verdict": "consistent" | "differs" | "inconclusive",
+                 "modes": [{"mode", "measured_hz" | null, "predicted_hz", "band_hz"}, ...],
+                 "taptune_version"}, ...]}
 
 Every read is
 validated here by hand-written checks on plain JSON data: nothing is ever executed,
@@ -140,6 +144,12 @@ def _text(value, src: str, key: str, max_len: int = 1000) -> str:
         _fail(src, key, f"must be a non-empty string, got {value!r}")
     if len(value) > max_len or any(ord(c) < 32 for c in value):
         _fail(src, key, f"must be one line of at most {max_len} characters, got {value[:60]!r}")
+    return value
+
+
+def _sha256(value, src: str, key: str) -> str:
+    if not isinstance(value, str) or not _SHA256.match(value):
+        _fail(src, key, f"must be 64 lower-case hex digits, got {value!r}")
     return value
 
 
@@ -427,9 +437,7 @@ class ProvenanceRecord:
     def from_dict(cls, data, source: str = "<library>", key: str = "identification") -> "ProvenanceRecord":
         """Validated record from JSON data; errors name ``source`` and ``key``."""
         d = _object(data, source, key, tuple(f for f in cls.__dataclass_fields__))
-        sha = d["sha256"]
-        if not isinstance(sha, str) or not _SHA256.match(sha):
-            _fail(source, f"{key}.sha256", f"must be 64 lower-case hex digits, got {sha!r}")
+        sha = _sha256(d["sha256"], source, f"{key}.sha256")
         seed = d["seed"]
         return cls(
             recording=_text(d["recording"], source, f"{key}.recording"),
@@ -442,6 +450,64 @@ class ProvenanceRecord:
             evaluations=_integer(d["evaluations"], source, f"{key}.evaluations"),
             bending_measured_hz=_frequencies(d["bending_measured_hz"], source, f"{key}.bending_measured_hz"),
             bending_model_hz=_frequencies(d["bending_model_hz"], source, f"{key}.bending_model_hz"),
+            taptune_version=_text(d["taptune_version"], source, f"{key}.taptune_version", 64),
+        )
+
+
+@dataclass(frozen=True)
+class CheckRecord:
+    """One check of the holder by a single tap (``taptune check``), kept in its history.
+
+    ``modes`` holds per bending mode ``{"mode", "measured_hz" (null if not measured),
+    "predicted_hz", "band_hz"}`` [Hz]; ``verdict`` is ``consistent``, ``differs`` or
+    ``inconclusive`` (taptune.identify.check).
+    """
+
+    date: str
+    recording: str
+    sha256: str
+    tool: str
+    stickout_mm: float
+    verdict: str
+    modes: tuple[dict, ...]
+    taptune_version: str
+
+    VERDICTS = ("consistent", "differs", "inconclusive")
+
+    def __post_init__(self):
+        object.__setattr__(self, "modes", tuple(self.modes))
+
+    def to_dict(self) -> dict:
+        return {"date": self.date, "recording": self.recording, "sha256": self.sha256, "tool": self.tool,
+                "stickout_mm": self.stickout_mm, "verdict": self.verdict, "modes": [dict(m) for m in self.modes],
+                "taptune_version": self.taptune_version}
+
+    @classmethod
+    def from_dict(cls, data, source: str = "<library>", key: str = "check") -> "CheckRecord":
+        """Validated record from JSON data; errors name ``source`` and ``key``."""
+        d = _object(data, source, key, tuple(f for f in cls.__dataclass_fields__))
+        sha = _sha256(d["sha256"], source, f"{key}.sha256")
+        if d["verdict"] not in cls.VERDICTS:
+            _fail(source, f"{key}.verdict", f"must be one of {', '.join(cls.VERDICTS)}, got {d['verdict']!r}")
+        if not isinstance(d["modes"], list):
+            _fail(source, f"{key}.modes", f"must be a list, got {_kind(d['modes'])}")
+        modes = []
+        for i, m in enumerate(d["modes"]):
+            k = f"{key}.modes[{i}]"
+            m = _object(m, source, k, ("mode", "measured_hz", "predicted_hz", "band_hz"))
+            measured = m["measured_hz"]
+            modes.append({"mode": _integer(m["mode"], source, f"{k}.mode", 1),
+                          "measured_hz": None if measured is None else _number(measured, source, f"{k}.measured_hz", 0.0),
+                          "predicted_hz": _number(m["predicted_hz"], source, f"{k}.predicted_hz", 0.0),
+                          "band_hz": _number(m["band_hz"], source, f"{k}.band_hz", 0.0, lo_open=False)})
+        return cls(
+            date=check_date(d["date"], source, f"{key}.date"),
+            recording=_text(d["recording"], source, f"{key}.recording"),
+            sha256=sha,
+            tool=_text(d["tool"], source, f"{key}.tool", _MAX_NAME),
+            stickout_mm=_number(d["stickout_mm"], source, f"{key}.stickout_mm", 0.0),
+            verdict=d["verdict"],
+            modes=tuple(modes),
             taptune_version=_text(d["taptune_version"], source, f"{key}.taptune_version", 64),
         )
 
@@ -469,6 +535,9 @@ class HolderEntry:
         The model options the parameters were identified with (MODEL.md §5.3).
     identifications : tuple of ProvenanceRecord
         Every identification of this holder, oldest first.
+    checks : tuple of CheckRecord
+        Every check by one tap (``taptune check``), oldest first; the key is optional in
+        the file (libraries from before checks existed) and left out while empty.
     """
 
     name: str
@@ -478,10 +547,12 @@ class HolderEntry:
     param_sets: tuple[HolderParams, ...] = ()
     model_options: dict = field(default_factory=dict)
     identifications: tuple[ProvenanceRecord, ...] = ()
+    checks: tuple[CheckRecord, ...] = ()
 
     def __post_init__(self):
         object.__setattr__(self, "param_sets", tuple(self.param_sets))
         object.__setattr__(self, "identifications", tuple(self.identifications))
+        object.__setattr__(self, "checks", tuple(self.checks))
 
     @classmethod
     def create(
@@ -515,12 +586,15 @@ class HolderEntry:
             "param_sets": [p.to_dict() for p in self.param_sets],
             "model_options": self.model_options,
             "identifications": [r.to_dict() for r in self.identifications],
-        }
+        } | ({"checks": [c.to_dict() for c in self.checks]} if self.checks else {})
 
     @classmethod
     def from_dict(cls, data, source: str = "<library>") -> "HolderEntry":
         """Validated entry from JSON data; errors name ``source`` (file and holder) and the key."""
-        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__))
+        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__ if f != "checks"), ("checks",))
+        checks = d.get("checks", [])
+        if not isinstance(checks, list):
+            _fail(source, "checks", f"must be a list, got {_kind(checks)}")
         holder = check_holder_dict(d["holder"], source)
         interface = _text(d["interface"], source, "interface", _MAX_NAME)
         if interface != holder["interface"]:
@@ -544,6 +618,7 @@ class HolderEntry:
             identifications=tuple(
                 ProvenanceRecord.from_dict(r, source, f"identifications[{i}]") for i, r in enumerate(records)
             ),
+            checks=tuple(CheckRecord.from_dict(c, source, f"checks[{i}]") for i, c in enumerate(checks)),
         )
 
     def holder_geometry(self) -> Holder:
@@ -619,14 +694,15 @@ class HolderEntry:
         return out
 
     def superseding(self, older: "HolderEntry") -> "HolderEntry":
-        """This entry's parameters and geometry with ``older``'s history kept in front.
+        """This entry's parameters and geometry with ``older``'s history (identifications, checks) kept in front.
 
         Records already in ``older`` are not repeated, so putting back an entry that was
         read, extended and written is the same as appending its new records.
         """
         history = list(older.identifications)
         history += [r for r in self.identifications if r not in older.identifications]
-        return replace(self, identifications=tuple(history))
+        checks = older.checks + tuple(c for c in self.checks if c not in older.checks)
+        return replace(self, identifications=tuple(history), checks=checks)
 
 
 def checked_entry(entry: HolderEntry, source: str) -> HolderEntry:

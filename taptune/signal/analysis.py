@@ -15,6 +15,7 @@ import numpy as np
 
 from taptune.errors import InputError
 from taptune.io.audio import Recording
+from taptune.signal.bandwidth import effective_bandwidth, hidden_modes
 from taptune.signal.labels import LabelOptions, interface_bands, interface_growth, label_peaks
 from taptune.signal.peaks import FIT_STARTS_S, Peak, pick_peaks, refine_peaks, tap_scatter
 from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
@@ -86,6 +87,9 @@ class SpectrumAnalysis:
         Interface bands used for ``local`` labels.
     interface : str or None
     warnings : list of str
+    bandwidth_hz : float or None
+        Highest frequency the recording carries [Hz]: a codec's low-pass, else Nyquist
+        (:func:`~taptune.signal.bandwidth.effective_bandwidth`).
     """
 
     file: str
@@ -101,6 +105,7 @@ class SpectrumAnalysis:
     excluded_bands_hz: list[tuple[float, float]]
     interface: str | None
     warnings: list[str]
+    bandwidth_hz: float | None = None
 
     @property
     def n_taps(self) -> int:
@@ -136,6 +141,7 @@ class SpectrumAnalysis:
             "interface": self.interface,
             "duration_s": round(self.duration_s, 6),
             "tap_details": [t.to_dict() for t in self.taps],
+            "bandwidth_hz": None if self.bandwidth_hz is None else round(float(self.bandwidth_hz), 1),
         }
 
 
@@ -260,6 +266,25 @@ def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions) -> list[str]:
     return w
 
 
+def _bandwidth_warnings(name, expected_hz, bandwidth_hz, low_pass, recording) -> list[str]:
+    """One warning per expected bending mode a codec's low-pass or the sample rate hides."""
+    out = []
+    fs = recording.sample_rate
+    for mode, f, limit in hidden_modes(expected_hz, bandwidth_hz, fs):
+        if not (low_pass and limit < 0.9 * fs / 2):
+            out.append(f"{name}: sample rate {fs} Hz: bending mode {mode} expected near {f / 1000:.1f} kHz "
+                       f"is above 0.9 x Nyquist; record at a higher rate (96 kHz)")
+            continue
+        source = f"{recording.codec.upper()} low-pass?" if recording.lossy else "a phone's or an app's low-pass?"
+        cut = f"{bandwidth_hz / 1000:.1f} kHz ({source})"
+        what = ("cannot be measured" if f >= bandwidth_hz
+                else "sits at that edge, where the codec bends peaks")
+        out.append(f"{name}: the recording carries nothing above {cut}; bending mode {mode} expected near "
+                   f"{f / 1000:.1f} kHz {what} — record WAV at ≥ 44.1 kHz, or use a recorder app "
+                   f"without compression")
+    return out
+
+
 def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", expected_hz=None,
                       bounds_hz=None, options: SpectrumOptions = SpectrumOptions(),
                       interface_tap: Recording | None = None, spread_hz=None) -> SpectrumAnalysis:
@@ -305,11 +330,9 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     if interface_tap is not None:
         ri = find_spectral_peaks(interface_tap, o)
         growth = interface_growth(peaks, ri["peaks"], stationary=r["stationary"])
-    nyq = recording.sample_rate / 2
-    if expected_hz is not None and len(expected_hz) and float(np.max(expected_hz)) > 0.9 * nyq:
-        warnings.append(f"sample rate {recording.sample_rate} Hz: the expected bending mode at "
-                        f"{float(np.max(expected_hz)):.0f} Hz is above 0.9 x Nyquist; record at "
-                        f"a higher rate (96 kHz)")
+    bandwidth, low_pass = effective_bandwidth(r["freq"], r["mag"], recording.sample_rate)
+    if expected_hz is not None:
+        warnings.extend(_bandwidth_warnings(name, expected_hz, bandwidth, low_pass, recording))
     labeled, lw = label_peaks(peaks, bands=bands, expected_hz=expected_hz, bounds_hz=bounds_hz,
                               spread_hz=spread_hz,
                               stationary=r["stationary"], growth_db=growth,
@@ -325,4 +348,4 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
         duration_s=recording.duration_s, freq_hz=r["freq"], magnitude=r["mag"],
         tap_magnitudes=r["tap_mag"], noise_magnitude=r["noise_mag"], taps=r["taps"],
         peaks=labeled, excluded_bands_hz=list(bands) if growth is None else [],
-        interface=interface, warnings=warnings)
+        interface=interface, warnings=warnings, bandwidth_hz=bandwidth)

@@ -192,14 +192,20 @@ def is_double_hit(x, onset: int, sample_rate: float, window_s=(2e-3, 30e-3), ord
     err = lfilter(np.concatenate(([1.0], a)), [1.0], seg)
     env = moving_average(np.abs(err), round(0.3e-3 * fs))
     k0 = onset - start
-    first = float(np.max(env[:k0 + int(2e-3 * fs)]))
-    later = env[k0 + int(window_s[0] * fs):k0 + int(window_s[1] * fs)]
+    k_first = int(np.argmax(env[:k0 + int(2e-3 * fs)]))
+    first = float(env[k_first])
+    w0 = k0 + int(window_s[0] * fs)
+    later = env[w0:k0 + int(window_s[1] * fs)]
     if not later.size:
         return False
     # In noise the prediction error is noise everywhere: a spike must also stand out
     # from the error's own median (noise bumps of a 0.3 ms envelope reach ~2x).
-    top = float(np.max(later))
-    return bool(top > ratio * first and top > 3.0 * float(np.median(later)))
+    k_top = w0 + int(np.argmax(later))
+    top = float(env[k_top])
+    # ... and be an event of its own: the error falls in between. A lossy codec (AAC)
+    # smears the impact over a few ms, so the first spike's tail reaches into the window.
+    separate = float(np.min(env[k_first:k_top + 1])) < 0.5 * top
+    return bool(top > ratio * first and top > 3.0 * float(np.median(later)) and separate)
 
 
 def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",

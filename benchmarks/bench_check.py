@@ -1,0 +1,137 @@
+"""``taptune check`` on the realism corpus's held-out pairs: the confusion table.
+
+For each reference holder of the corpus's ``check`` split (outside the model family:
+non-linear contact profile, description errors, nut mass, doublets, phone recordings),
+identify it from its tap with the described assembly, then check taps of
+(a) the same holder at its first query stick-out (expected ``consistent``),
+(b) the same holder with its contact stiffness × 0.5 and × 0.3 at the recorded stick-out
+(expected ``differs``), (c) × 0.5 at the query stick-out (expected ``differs``), and
+(d) the same holder clamped again at the recorded stick-out (``consistent``; the ruler
+error of re-clamping is drawn anew). :func:`rejudge` re-evaluates the verdicts of saved
+rows with other bands (``check_tap`` is a pure function): how the verdicts depend on the band.
+Needs ``benchmarks.realism`` (the corpus). One identification ≈ 5–7 CPU-s.
+
+    python -m benchmarks.bench_check --n 12 [--split check|infamily] [--out check.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+
+def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
+    """Identify reference ``index`` of ``split`` and check its pairs; one row per pair."""
+    from benchmarks.realism.audio import record
+    from benchmarks.realism.corpus import elsewhere, make_case, worn
+    from taptune.errors import TaptuneError
+    from taptune.identify import IdentifyOptions
+    from taptune.identify.pipeline import identify_recordings
+    from taptune.io.audio import write_audio
+    from taptune.library.checks import check_holder
+    from taptune.library.record import entry_from_identification
+
+    ref = make_case(split, index)
+    rec = record(ref, path=str(Path(folder) / f"{ref.name}.wav"))
+    write_audio(rec.path, rec.samples, rec.sample_rate, rec.subtype)  # the library hashes the file
+    t0 = time.process_time()
+    try:
+        _, result = identify_recordings([rec], [ref.described], IdentifyOptions(seed=0, jobs=1))
+    except TaptuneError as err:
+        return [{"reference": ref.name, "failed": str(err)}]
+    identify_cpu = time.process_time() - t0
+    entry = entry_from_identification(result, [rec], [ref.described])
+    query = ref.queries[0].stickout_mm
+    here = ref.described.stickout * 1e3
+    pairs = [(elsewhere(ref, here), "consistent", "re-clamped"), (elsewhere(ref, query), "consistent", "elsewhere"),
+             (worn(ref, 0.5), "differs", "worn 0.5"),
+             (worn(ref, 0.3), "differs", "worn 0.3"), (worn(ref, 0.5, query), "differs", "worn 0.5 elsewhere")]
+    rows = []
+    for other, expected, kind in pairs:
+        t1 = time.process_time()
+        try:
+            check = check_holder(record(other, path=f"{other.name}.wav"), other.described, entry.name,
+                                 library=None, save=False, entry=entry)
+        except TaptuneError as err:
+            rows.append({"reference": ref.name, "kind": kind, "expected": expected, "verdict": "error",
+                         "error": str(err)})
+            continue
+        rows.append({
+            "reference": ref.name, "kinds": list(ref.kinds), "family": ref.family, "kind": kind,
+            "expected": expected, "verdict": check.verdict,
+            "stickout_mm": round(other.described.stickout * 1e3, 3),
+            "truth_hz": [round(f, 2) for f in other.truth.bending_hz],
+            "modes": check.result.to_dict()["modes"], "reasons": list(check.result.reasons),
+            "worn_hz": [round(f, 2) for f in check.worn_hz],
+            "identify_cpu_s": round(identify_cpu, 2), "check_cpu_s": round(time.process_time() - t1, 2),
+        })
+    return rows
+
+
+def rejudge(row: dict, scale: float = 1.0, floor: float = 0.0) -> str:
+    """The verdict of a saved row with every band × ``scale`` and at least ``floor`` × f."""
+    from types import SimpleNamespace
+
+    from taptune.identify import Prediction
+    from taptune.identify.check import check_tap
+
+    modes = row["modes"]
+    peaks = [SimpleNamespace(hz=m["measured_hz"], mode=m["mode"], kind="bending", scatter_hz=m["sigma_hz"])
+             for m in modes if m["status"] not in ("not measured", "hidden")]
+    bands = tuple(max(scale * m["band_hz"], floor * m["predicted_hz"]) for m in modes)
+    prediction = Prediction(row["stickout_mm"], tuple(m["predicted_hz"] for m in modes), bands, (0.0,) * 3, (0.0,) * 3)
+    analysis = SimpleNamespace(bending_peaks=peaks, bandwidth_hz=None)
+    return check_tap(analysis, prediction, worn_hz=row["worn_hz"]).verdict
+
+
+def confusion(rows: list[dict]) -> dict:
+    """{pair kind: Counter(verdict)}."""
+    table: dict[str, Counter] = {}
+    for r in rows:
+        table.setdefault(r.get("kind", "failed"), Counter())[r.get("verdict", "failed")] += 1
+    return table
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--n", type=int, default=12, help="reference holders")
+    ap.add_argument("--first", type=int, default=0, help="first reference index")
+    ap.add_argument("--split", default="check", help="corpus split: check (held out) or infamily (the control)")
+    ap.add_argument("--out", help="write every row as JSON")
+    ap.add_argument("--rejudge", metavar="JSON", help="only re-evaluate saved rows with scaled and floored bands")
+    args = ap.parse_args(argv)
+    if args.rejudge:
+        with open(args.rejudge) as f:
+            saved = [r for r in json.load(f) if "modes" in r]
+        for scale, floor in [(1, 0), (2, 0), (3, 0), (1, 0.005), (1, 0.01), (2, 0.005)]:
+            print(f"\nbands x{scale}, at least {100 * floor:g} %")
+            print_confusion([{**r, "verdict": rejudge(r, scale, floor)} for r in saved])
+        return 0
+    rows = []
+    folder = tempfile.mkdtemp(prefix="bench-check-")
+    for i in range(args.first, args.first + args.n):
+        new = run_reference(i, folder, args.split)
+        rows += new
+        for r in new:
+            print(f"{r['reference']:<28} {r.get('kind', ''):<20} expected {r.get('expected', ''):<11} "
+                  f"got {r.get('verdict', r.get('failed'))}", flush=True)
+        if args.out:
+            with open(args.out, "w") as f:
+                json.dump(rows, f, indent=1)
+    print()
+    print_confusion(rows)
+    return 0
+
+
+def print_confusion(rows: list[dict]) -> None:
+    print("pair kind            consistent  differs  inconclusive  error")
+    for kind, c in confusion(rows).items():
+        print(f"{kind:<20} {c['consistent']:>10} {c['differs']:>8} {c['inconclusive']:>13} {c['error']:>6}")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

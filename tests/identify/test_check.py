@@ -1,0 +1,141 @@
+"""Verify by one tap: the verdict rules, and the in-family cases (same holder elsewhere, worn holder)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from taptune.identify import Prediction
+from taptune.identify.check import check_tap
+
+from .check_setup import HOLDER_NAME, identified_holder, tap_file
+
+PREDICTED = (3000.0, 10000.0, 16000.0)
+BAND = (6.0, 30.0, 60.0)  # 0.2, 0.3, 0.375 %
+WORN = (2900.0, 9800.0, 15900.0)  # what halved contact stiffnesses would give
+
+
+def _analysis(measured, scatter=0.0, bandwidth_hz=24000.0):
+    """An analysis with bending peaks at ``measured`` (None = mode not found)."""
+    peaks = [SimpleNamespace(hz=f, mode=n, kind="bending", scatter_hz=scatter)
+             for n, f in enumerate(measured, 1) if f is not None]
+    return SimpleNamespace(bending_peaks=peaks, bandwidth_hz=bandwidth_hz)
+
+
+def _prediction(bands=BAND):
+    return Prediction(53.5, PREDICTED, bands, (0.003,) * 3, (0.0,) * 3)
+
+
+def _check(measured, bands=BAND, worn=WORN, **kw):
+    return check_tap(_analysis(measured, **kw), _prediction(bands), worn_hz=worn)
+
+
+def test_inside_every_band_is_consistent():
+    r = _check((3004.0, 9980.0, 16050.0))
+    assert r.verdict == "consistent" and [m.status for m in r.modes] == ["inside"] * 3
+    assert all(m.z == 0 for m in r.modes)
+    assert r.modes[0].deviation_pct == pytest.approx(100 * 4 / 3000)
+
+
+def test_one_mode_far_outside_differs():
+    # 3000 - 6 - 3 x 1.5 Hz (sigma = 0.05 % of f) = 2989.5: 2985 is 4.0 sigma below the band.
+    r = _check((2985.0, 10000.0, 16000.0))
+    assert r.verdict == "differs" and r.modes[0].status == "outside"
+    assert r.modes[0].z == pytest.approx(-(15.0 - 6.0) / (5e-4 * 2985.0))
+
+
+def test_modes_above_the_prediction_differ_and_point_at_the_description():
+    r = _check((3020.0, 10000.0, 16000.0))
+    assert r.verdict == "differs" and "wear does not do" in r.reasons[-1]
+    assert "wear does not do" not in " ".join(_check((2985.0, 10000.0, 16000.0)).reasons)
+
+
+def test_two_modes_just_below_their_bands_differ():
+    # Each alone is borderline (1-2 sigma beyond); together they point the same way: a softer contact.
+    r = _check((2992.0, 9965.0, 16000.0))
+    assert [m.status for m in r.modes] == ["beyond", "beyond", "inside"]
+    assert r.verdict == "differs"
+
+
+def test_one_mode_just_beyond_is_inconclusive():
+    r = _check((2992.0, 10000.0, 16000.0))
+    assert r.verdict == "inconclusive" and "borderline" in r.reasons[0]
+
+
+def test_two_modes_beyond_in_opposite_directions_are_inconclusive():
+    assert _check((2992.0, 10035.0, 16000.0)).verdict == "inconclusive"
+
+
+def test_tap_to_tap_scatter_widens_the_measurement_uncertainty():
+    # 2985 Hz is 4 sigma out with the 0.05 % floor, but only 1.5 sigma with a 6 Hz scatter.
+    assert _check((2985.0, 10000.0, 16000.0), scatter=6.0).verdict == "inconclusive"
+
+
+def test_no_bending_peak_is_inconclusive():
+    r = _check((None, None, None))
+    assert r.verdict == "inconclusive" and [m.status for m in r.modes] == ["not measured"] * 3
+    assert "no bending mode" in r.reasons[0]
+
+
+def test_bands_wider_than_the_wear_shift_cannot_say_consistent():
+    # Bands of 5 %: a worn holder (-3.3 % on f1) would read inside too.
+    r = _check((3004.0, 9980.0, 16050.0), bands=(150.0, 500.0, 800.0))
+    assert r.verdict == "inconclusive" and "worn" in r.reasons[-1]
+
+
+def test_modes_at_the_edge_of_the_recording_bandwidth_are_not_used():
+    # An AAC low-pass at 16 kHz: the 16 kHz mode is not used, whatever its value.
+    r = _check((3004.0, 9980.0, 15000.0), bandwidth_hz=16000.0)
+    assert r.verdict == "consistent" and r.modes[2].status == "hidden" and r.modes[2].z is None
+
+
+def test_a_single_measured_mode_is_consistent_but_says_so():
+    r = _check((3004.0, None, None))
+    assert r.verdict == "consistent" and "only mode 1" in r.reasons[-1]
+    assert r.to_dict()["verdict"] == "consistent" and len(r.to_dict()["modes"]) == 3
+
+
+# ----------------------------------------------------------------------------- in the model family
+
+
+@pytest.fixture(scope="module")
+def holder():
+    return identified_holder()
+
+
+def _verdict(holder, stickout_mm, factor, seed=7):
+    from taptune.io.assembly import load_assembly
+    from taptune.io.audio import read_audio
+    from taptune.library.checks import check_holder
+
+    folder, _, _, entry = holder
+    wav, toml = tap_file(folder, stickout_mm, factor, seed)
+    return check_holder(read_audio(wav), load_assembly(toml), HOLDER_NAME, save=False, entry=entry)
+
+
+@pytest.mark.parametrize("stickout_mm", [45.0, 53.5, 63.5])
+def test_the_same_holder_at_another_stickout_is_consistent(holder, stickout_mm):
+    check = _verdict(holder, stickout_mm, 1.0)
+    assert check.verdict == "consistent", check.to_dict()
+    assert len(check.result.measured) >= 2
+
+
+@pytest.mark.xfail(strict=False, reason="the near-optimal band at 73.5 mm (±0.42 % on f1) is narrower than the "
+                   "0.49 % the one-tap identification misses by: inconclusive until the honest bands land")
+def test_the_same_holder_far_from_the_identified_stickout_is_consistent(holder):
+    assert _verdict(holder, 73.5, 1.0).verdict == "consistent"
+
+
+def test_a_good_holder_never_reads_differs(holder):
+    for stickout_mm, seed in [(45.0, 8), (73.5, 10)]:
+        assert _verdict(holder, stickout_mm, 1.0, seed).verdict != "differs", (stickout_mm, seed)
+
+
+@pytest.mark.parametrize("stickout_mm,factor", [(53.5, 0.5), (63.5, 0.5), (73.5, 0.5), (45.0, 0.3), (63.5, 0.3)])
+def test_a_worn_collet_differs(holder, stickout_mm, factor):
+    """Contact stiffnesses at half (or 30 %): every mode drops, f1 by 3-7 %, far outside its band."""
+    check = _verdict(holder, stickout_mm, factor)
+    assert check.verdict == "differs", check.to_dict()
+    assert all(m.deviation_pct < 0 for m in check.result.measured)
+    # The worn-holder prediction (contact halved) is what the check compares its sensitivity with.
+    assert np.all(np.array(check.worn_hz) < np.array(check.prediction.bending_hz))
