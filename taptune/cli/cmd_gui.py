@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library")
+VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library", "check")
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -33,6 +33,8 @@ def add_parser(sub, name: str, help_text: str) -> None:
                    help="window size in pixels (default 1366x768)")
     p.add_argument("--view", choices=VIEWS, help="with --screenshot: the tab to show")
     p.add_argument("--identify", action="store_true", help="with --screenshot: identify the holder first")
+    p.add_argument("--check", action="store_true",
+                   help="with --screenshot: check WAV against --holder first (the check is saved to its history)")
 
 
 def run(args) -> int:
@@ -51,8 +53,10 @@ def run(args) -> int:
         from taptune.io.machine import load_machine
 
         load_machine(args.machine)
-    if (args.view or args.identify) and not args.screenshot:
-        raise InputError("--view and --identify only apply with --screenshot")
+    if (args.view or args.identify or args.check) and not args.screenshot:
+        raise InputError("--view, --identify and --check only apply with --screenshot")
+    if args.check and not (args.wav and args.holder):
+        raise InputError("--check needs a recording (WAV) and --holder NAME")
     holder = None
     if args.holder:
         from taptune.library import HolderLibrary, default_library_path
@@ -61,4 +65,5 @@ def run(args) -> int:
     from taptune.gui.app import run as run_app
 
     return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify,
-                   holder, second=args.second, machine=args.machine)
+                   holder, second=args.second, machine=args.machine,
+                   check=args.check)

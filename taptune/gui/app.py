@@ -91,12 +91,13 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
 
 def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
-        identify: bool = False, holder=None, second=None, machine=None) -> int:
+        identify: bool = False, holder=None, second=None, machine=None, check: bool = False) -> int:
     """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
 
     ``holder`` (a library entry) opens the predictor with it and the assembly's tool;
     ``second`` is a recording at another stick-out, identified jointly with ``wav``;
-    ``machine`` a machine file for the Machine view (remembered unless taking a screenshot).
+    ``machine`` a machine file for the Machine view (remembered unless taking a screenshot);
+    ``check`` checks ``wav`` against ``holder`` before the screenshot.
 
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
@@ -117,12 +118,12 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     previous_hook = sys.excepthook
     install_excepthook(window)
     try:
-        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second)
+        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second, check)
     finally:
         sys.excepthook = previous_hook
 
 
-def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second=None) -> int:
+def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second=None, check=False) -> int:
     window.resize(*size)
     if assembly:
         window.assembly_panel.load_file(assembly)
@@ -151,6 +152,13 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, 
                 ended = wait_for(window.identification_ended, SCREENSHOT_TIMEOUT_S)
                 if not ended or ended[0] != "finished":
                     print("taptune gui: identification did not finish", file=sys.stderr)
+                    status = 1
+            if check and status == 0:
+                window.library_view.select(holder.name)
+                window.start_check()
+                ended = wait_for(window.check_ended, SCREENSHOT_TIMEOUT_S)
+                if not ended or ended[0] is None:
+                    print("taptune gui: the check did not finish", file=sys.stderr)
                     status = 1
     if not screenshot:
         return app.exec()

@@ -21,12 +21,13 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from taptune.gui.check_view import checks_html
 from taptune.gui.fit_view import PARAM_ROWS
 from taptune.gui.layout import hsplit
 from taptune.gui.messages import show_error, show_info
 from taptune.gui.signals import emit
 
-COLUMNS = ("holder", "interface", "identifications", "last identified")
+COLUMNS = ("holder", "interface", "identifications", "last identified", "last check")
 
 
 def entry_html(entry) -> str:
@@ -52,6 +53,7 @@ def entry_html(entry) -> str:
         f"<p><b>Parameters</b> ({len(entry.param_sets)} near-optimal sets)</p>"
         f"<table cellspacing=4>{rows}</table>"
         f"<p><b>Identifications</b></p><ul>{history or '<li>none recorded</li>'}</ul>"
+        f"<p><b>Checks by one tap</b> (newest first)</p><ul>{checks_html(entry)}</ul>"
     )
 
 
@@ -139,14 +141,18 @@ class LibraryView(QWidget):
             show_error(self, "Cannot read the holder library", str(err))
         self.table.setRowCount(len(self.entries))
         for r, entry in enumerate(self.entries.values()):
+            checks = getattr(entry, "checks", ())
             values = (entry.name, entry.interface, str(len(entry.identifications)),
-                      (entry.last_identified or "–").replace("T", " ").rstrip("Z"))
+                      (entry.last_identified or "–").replace("T", " ").rstrip("Z"),
+                      checks[-1].verdict if checks else "–")
             for c, text in enumerate(values):
                 self.table.setItem(r, c, QTableWidgetItem(text))
         if not self.entries:
             self.details.setHtml("<p>The library is empty: identify a holder and save it, or import a library file.</p>")
         elif self.table.currentRow() < 0:
             self.table.selectRow(0)
+        else:
+            self._selected()  # the same row may hold newer data (a check, a new identification)
         self._update_buttons()
         emit(self.changed, self.entries)
 

@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
 
 from taptune.gui.advice import Banner, second_tap_advice
 from taptune.gui.assembly_panel import AssemblyPanel
+from taptune.gui.check_view import CheckView
 from taptune.gui.fit_view import FitView
 from taptune.gui.library_view import LibraryView
 from taptune.gui.machine_view import MachineView
@@ -40,9 +41,12 @@ from taptune.gui.recorder_panel import RecorderPanel
 from taptune.gui.signals import emit
 from taptune.gui.spectrum_view import SpectrumView, relabel
 from taptune.gui.workers import TaskRunner
+from taptune.io.audio import AUDIO_SUFFIXES
 
-AUDIO_SUFFIXES = (".wav", ".flac")
-VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library")
+# The open dialogs' filter: every format read_audio reads, in both cases.
+AUDIO_FILTER = "Recordings (" + " ".join(f"*{s} *{s.upper()}" for s in AUDIO_SUFFIXES) + ")"
+
+VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library", "check")
 
 
 def sidecar_assembly(path) -> str | None:
@@ -87,6 +91,13 @@ class Take:
     assembly: object
 
 
+def run_check(recording, assembly, entry, library_path, progress=None):
+    """Check library holder ``entry`` with one tap (worker thread): ``taptune check``'s call, saved to its history."""
+    from taptune.library.checks import check_holder
+
+    return check_holder(recording, assembly, entry.name, str(library_path), save=True, entry=entry)
+
+
 def run_identification(analyses, assemblies, options, progress=None):
     """Joint identification of one or several recordings (worker thread); ``progress`` may cancel it.
 
@@ -120,6 +131,7 @@ class MainWindow(QMainWindow):
     identification_ready = Signal(object)
     identification_ended = Signal(str)  # "finished", "failed" or "cancelled"
     saved_to_library = Signal(str)
+    check_ended = Signal(object)  # the HolderCheck, or None when it failed
     load_failed = Signal(str)
 
     def __init__(self, library_path, identify_options=None, stream_factory=None, devices=None, settings=None,
@@ -157,6 +169,8 @@ class MainWindow(QMainWindow):
         self.predictor = Predictor()
         self.machine = MachineView(settings)
         self.library_view = LibraryView(library_path)
+        self.check_view = CheckView()
+        self._check_task = None
 
         record_tab = QWidget()
         rl = QVBoxLayout(record_tab)
@@ -179,6 +193,7 @@ class MainWindow(QMainWindow):
         self.tabs.addTab(self.predictor, "4  Predict")
         self.tabs.addTab(self.machine, "5  Machine")
         self.tabs.addTab(self.library_view, "Library")
+        self.tabs.addTab(self.check_view, "Check")
 
         # The workflow bar: always visible, in the order of the job.
         self.open_button = QPushButton("Open recording…")
@@ -188,6 +203,7 @@ class MainWindow(QMainWindow):
         self.identify_button = QPushButton("Identify holder")
         self.cancel_button = QPushButton("Cancel")
         self.save_button = QPushButton("Save to library")
+        self.check_button = QPushButton("Check")
         self.progress = QProgressBar()
         self.progress.setRange(0, 1000)
         self.progress.setTextVisible(True)
@@ -203,6 +219,7 @@ class MainWindow(QMainWindow):
         self.identify_button.clicked.connect(self.start_identification)
         self.cancel_button.clicked.connect(self.cancel_identification)
         self.save_button.clicked.connect(self.save_to_library)
+        self.check_button.clicked.connect(self.start_check)
         bar = QHBoxLayout()
         bar.addWidget(self.open_button)
         bar.addWidget(self.open2_button)
@@ -211,6 +228,7 @@ class MainWindow(QMainWindow):
         bar.addWidget(self.progress, 1)
         bar.addWidget(self.cancel_button)
         bar.addWidget(self.save_button)
+        bar.addWidget(self.check_button)
 
         right = QWidget()
         rv = QVBoxLayout(right)
@@ -244,6 +262,7 @@ class MainWindow(QMainWindow):
         self.recorder.status.connect(self.statusBar().showMessage)
         self.spectrum.relabel_requested.connect(self.relabel_peak)
         self.library_view.changed.connect(self.assembly_panel.reload_choices)
+        self.library_view.table.itemSelectionChanged.connect(self._update_actions)
         self.library_view.use_for_prediction.connect(self.use_library_entry)
         self.library_view.use_on_machine.connect(self.use_library_entry_on_machine)
         self.predictor.failed.connect(lambda m: self.statusBar().showMessage(f"Prediction: {m}", 8000))
@@ -291,7 +310,7 @@ class MainWindow(QMainWindow):
     def busy(self) -> bool:
         """True while a recording is analysed or a holder identified."""
         return (self._loading is not None or self._second_loading is not None
-                or self._identify_task is not None)
+                or self._identify_task is not None or self._check_task is not None)
 
     def _update_actions(self) -> None:
         identifying = self._identify_task is not None
@@ -305,6 +324,12 @@ class MainWindow(QMainWindow):
         else:
             self.identify_button.setToolTip("")
         self.open2_button.setEnabled(self.analysis is not None and not identifying)
+        holder = self.library_view.selected()
+        self.check_button.setEnabled(holder is not None and self.recording is not None
+                                     and self.assembly_panel.assembly is not None and not self.busy)
+        self.check_button.setToolTip(
+            f"Check this tap against library holder '{holder.name}' (selected in the Library tab)" if holder
+            else "Select a holder in the Library tab, and open or record a tap of it, to check it")
         self.cancel_button.setEnabled(identifying)
         self.save_button.setEnabled(self.identification is not None and not identifying)
         self.open_button.setEnabled(not identifying)
@@ -313,14 +338,14 @@ class MainWindow(QMainWindow):
 
     def _open_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open recording", str(Path.cwd() / "recordings"),
-                                              "Recordings (*.wav *.flac *.WAV *.FLAC)")
+                                              AUDIO_FILTER)
         if path:
             self.load_recording(path)
 
     def _open_second_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open the recording at the 2nd stick-out",
                                               str(Path(self.recording_path or Path.cwd() / "recordings").parent),
-                                              "Recordings (*.wav *.flac *.WAV *.FLAC)")
+                                              AUDIO_FILTER)
         if path:
             self.load_second_recording(path)
 
@@ -603,6 +628,51 @@ class MainWindow(QMainWindow):
         self.statusBar().showMessage("Identification cancelled.", 8000)
         self._update_actions()
         emit(self.identification_ended, "cancelled")
+
+    # ------------------------------------------------------------------ check
+
+    def start_check(self) -> None:
+        """Check the loaded tap against the library holder selected in the Library tab (worker thread).
+
+        The tap's tool and stick-out are the panel's; the holder's geometry is the library's.
+        """
+        from taptune.errors import InputError
+
+        entry = self.library_view.selected()
+        assembly = self.assembly_panel.assembly
+        if entry is None or self.recording is None or assembly is None or self.busy:
+            return
+        try:
+            assembly = assembly.with_holder(entry.holder_geometry())
+        except (InputError, TypeError, ValueError) as err:
+            show_error(self, "Cannot check this holder with this tool", str(err))
+            return
+        self._set_progress(None, f"checking {entry.name}")
+        self.statusBar().showMessage(f"Checking the tap against {entry.name!r}…")
+        self._check_task = self.runner.start(
+            run_check, self.recording, assembly, entry, self.library_view.library_path, with_progress=False,
+            on_finished=self._checked, on_failed=self._check_failed)
+        self._update_actions()
+
+    def _checked(self, check) -> None:
+        self._check_task = None
+        self._set_progress(0, "")
+        self.check_view.show_check(check)
+        self.show_view("check")
+        self.library_view.refresh()
+        self.library_view.select(check.holder)
+        if check.holder in self.library_view.entries:
+            self.check_view.show_history(self.library_view.entries[check.holder])
+        self.statusBar().showMessage(f"Check of {check.holder!r}: {check.verdict}.")
+        self._update_actions()
+        emit(self.check_ended, check)
+
+    def _check_failed(self, message: str) -> None:
+        self._check_task = None
+        self._set_progress(0, "")
+        show_error(self, "Check failed", f"{message}\nThe library is unchanged.")
+        self._update_actions()
+        emit(self.check_ended, None)
 
     # ------------------------------------------------------------------ library and prediction
 

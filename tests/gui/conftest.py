@@ -32,9 +32,10 @@ def tap_sound(frequencies_hz, damping, amplitudes, onsets_s, seconds, fs=FS, noi
     return 0.5 * x / np.max(np.abs(x))
 
 
-def write_recording(folder, stickout_mm: float, seed: int = 1):
+def write_recording(folder, stickout_mm: float, seed: int = 1, contact_factor: float = 1.0):
     """A 5-tap WAV of the reference assembly (holder A) at ``stickout_mm`` and its sidecar assembly file.
 
+    ``contact_factor`` scales both contact stiffnesses (a worn or badly seated holder).
     Returns ``(wav, toml, (f1, f2, f3) [Hz])``.
     """
     import soundfile
@@ -47,7 +48,9 @@ def write_recording(folder, stickout_mm: float, seed: int = 1):
     toml = folder / f"er32_d16_{stickout_mm:g}mm.toml"
     toml.write_text(REFERENCE_TOML.replace("stickout = 53.5", f"stickout = {stickout_mm:g}"))
     assembly = load_assembly(toml)
-    modes = solve_modes(build_model(assembly), HolderParams(**HOLDER_A), n_modes=3)
+    params = HolderParams(**{**HOLDER_A, "k_tt": contact_factor * HOLDER_A["k_tt"],
+                             "k_rr": contact_factor * HOLDER_A["k_rr"]})
+    modes = solve_modes(build_model(assembly), params, n_modes=3)
     x = tap_sound(modes.frequency_hz[:3], modes.damping_ratio[:3], (1.0, 0.5, 0.35),
                   onsets_s=(0.3, 1.0, 1.7, 2.4, 3.1), seconds=3.8, seed=seed)
     wav = toml.with_suffix(".wav")
