@@ -76,9 +76,10 @@ class FitView(QWidget):
                         label="measured (average of taps)")
                 ax.plot(f, np.asarray(result.model_shape[i]), color=MODEL, lw=1.3, ls="--", label="identified model")
                 ax.set_ylabel("level / peak")
-                heading = title or "Around bending mode 1"
-                ax.set_title(heading if n == 1 else (f"{heading} (joint fit)\n" if i == 0 else "") + names[i],
-                             loc="left")
+                if n == 1:
+                    ax.set_title(title or "Around bending mode 1", loc="left")
+                else:  # one line per plot: the recording (the holder is in the window's other views)
+                    ax.set_title(f"{names[i]}" + (f" — joint fit of {n} recordings" if i == 0 else ""), loc="left")
                 if i == 0:
                     ax.text(0.01, 0.98, "the window the fit compares:\nf1 ± 100 Hz", transform=ax.transAxes,
                             va="top", ha="left", fontsize=8, color="#555555")
