@@ -27,6 +27,7 @@ def predict_stickouts(entry, assembly, stickouts_mm=None):
 
 def run(args) -> int:
     from taptune.cli.common import format_table, output_path, write_json
+    from taptune.identify.bands import second_tap_advice
     from taptune.io.assembly import load_assembly
     from taptune.library.store import HolderLibrary, default_library_path
 
@@ -42,6 +43,9 @@ def run(args) -> int:
     predictions, assemblies = predict_stickouts(entry, assembly, args.stickout)
     # Each stick-out has its own geometry warnings (e.g. flutes reaching into the holder).
     warnings = list(dict.fromkeys(warnings + [w for a in assemblies for w in a.warnings]))
+    advice = second_tap_advice(predictions)
+    if advice:
+        warnings.append(advice)
     out = {"holder": entry.name, "assembly": args.assembly, "tool": assembly.tool.name,
            "predictions": [p.to_dict() for p in predictions], "warnings": warnings}
     write_json(out, args.json)
@@ -52,6 +56,8 @@ def run(args) -> int:
                         + [f"{100 * p.damping_ratio[0]:.2f}"])
         print(f"holder: {entry.name}\ntool:   {assembly.tool.name}")
         print(format_table(rows, ["stick-out [mm]", "f1 [Hz]", "f2 [Hz]", "f3 [Hz]", "ζ1 [%]"]))
+        for p in predictions:
+            print(f"{p.stickout_mm:g} mm: {p.band_text()}")
         for w in warnings:
             print(f"warning: {w}", file=sys.stderr)
     if args.plot:

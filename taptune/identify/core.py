@@ -22,8 +22,10 @@ from typing import Callable, Sequence
 import numpy as np
 
 from taptune.errors import InputError
+from taptune.io.assembly import Tolerances
 from taptune.identify.objective import Objective, ObjectiveOptions, Target, make_target, model_shape, objective_terms
-from taptune.identify import search
+from taptune.identify import bands, search
+from taptune.identify.bands import Band
 from taptune.identify.optimize import Cancelled, GAOptions
 from taptune.model.params import NAMES, HolderParams, from_p, p_to_unit, to_p, unit_to_p
 
@@ -120,18 +122,26 @@ class Prediction:
 
     stickout_mm: float
     bending_hz: tuple[float, ...]
-    bending_hz_spread: tuple[float, ...]
+    bending_hz_spread: tuple[float, ...]  # the honest ± half-width (band.half_width_hz)
     damping_ratio: tuple[float, ...]
     damping_ratio_spread: tuple[float, ...]
+    band: Band | None = field(default=None, compare=False)  # how the ± was made
 
     def to_dict(self) -> dict:
-        return {
+        out = {
             "stickout": round(self.stickout_mm, 4),
             "bending_hz": [round(f, 2) for f in self.bending_hz],
             "bending_hz_spread": [round(f, 2) for f in self.bending_hz_spread],
             "damping_ratio": [round(z, 6) for z in self.damping_ratio],
             "damping_ratio_spread": [round(z, 6) for z in self.damping_ratio_spread],
         }
+        if self.band is not None:
+            out["band"] = self.band.to_dict()
+        return out
+
+    def band_text(self) -> str:
+        """How sure the frequencies are, in plain words ('' without a band)."""
+        return self.band.text(self.bending_hz) if self.band is not None else ""
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -274,32 +284,60 @@ def identify(
 
 
 def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3,
-            relative_floor: float = 5e-4) -> Prediction:
+            relative_floor: float = 5e-4, *, identified: Sequence | None = None, tolerances=None,
+            model_form=None) -> Prediction:
     """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
 
-    The first set is the best fit and gives the values. Every other set explains the
-    measurement as well (MODEL.md §8.6), so the spread is the largest deviation of any of
-    them from the best — a symmetric band that holds them all — but never less than
-    ``relative_floor`` × f: the measured frequencies themselves are only known to about
-    0.05 % (or to the fit's residual misfit, if larger; see :func:`fit_misfit`).
+    The first set is the best fit and gives the values. The ± half-width
+    (``bending_hz_spread``) is the honest band of :mod:`taptune.identify.bands`:
+    the near-optimal sets' spread (every set explains the measurement as well, MODEL.md
+    §8.6; never less than ``relative_floor`` × f, the fit's misfit, see
+    :func:`fit_misfit`), the stated geometry tolerances propagated through the model,
+    and the calibrated model-form term, combined in quadrature.
+
+    Parameters
+    ----------
+    identified : sequence of Assembly, optional
+        The assemblies the holder was identified on (their stick-outs set the model-form
+        term's Δ and the identification side of the geometry term; unknown: Δ = 20 mm).
+    tolerances : Tolerances, optional
+        Default: ``assembly.tolerances`` (the assembly file's keys, or their defaults).
+    model_form : sequence of float, optional
+        Model-form coefficients per mode (default :data:`bands.MODEL_FORM`; zeros give
+        the parameter and geometry band alone).
     """
     from taptune.model import ModelOptions, build_model, solve_modes
 
     if not param_sets:
         raise InputError("predict: the holder has no identified parameters")
-    fe = build_model(assembly, model_options or ModelOptions())
+    options = model_options or ModelOptions()
+    fe = build_model(assembly, options)
     f, z = [], []
     for params in param_sets:
         modes = solve_modes(fe, params, n_modes=n_modes)
         f.append(np.asarray(modes.frequency_hz[:n_modes], dtype=float))
         z.append(np.asarray(modes.damping_ratio[:n_modes], dtype=float))
     f, z = np.array(f), np.array(z)
+    tol = tolerances if tolerances is not None else getattr(assembly, "tolerances", Tolerances())
+    identified = list(identified or ())
+    set_hz = np.maximum(np.abs(f - f[0]).max(0), relative_floor * f[0])
+    geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0])
+    delta = bands.delta_stickout_mm(assembly, identified)
+    model_hz = bands.model_form_term(f[0], delta, bands.MODEL_FORM if model_form is None else model_form)
+    half = bands.compose(set_hz, geometry_hz, model_hz)
+    band = Band(
+        half_width_hz=tuple(map(float, half)), set_hz=tuple(map(float, set_hz)),
+        geometry_hz=tuple(map(float, geometry_hz)), model_form_hz=tuple(map(float, model_hz)),
+        geometry_parts_hz={k: tuple(map(float, v)) for k, v in parts.items()},
+        delta_stickout_mm=delta, recordings=len(identified), tolerances=tol,
+    )
     return Prediction(
         stickout_mm=assembly.stickout * 1e3,
         bending_hz=tuple(map(float, f[0])),
-        bending_hz_spread=tuple(map(float, np.maximum(np.abs(f - f[0]).max(0), relative_floor * f[0]))),
+        bending_hz_spread=band.half_width_hz,
         damping_ratio=tuple(map(float, z[0])),
         damping_ratio_spread=tuple(map(float, np.abs(z - z[0]).max(0))),
+        band=band,
     )
 
 

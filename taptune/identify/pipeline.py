@@ -7,6 +7,8 @@ frequencies with nominal or library parameters, and the physical bounds of MODEL
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from taptune.model.params import NOMINAL, HolderParams
@@ -31,8 +33,6 @@ def model_expectation(assembly, params: HolderParams | None = None, model_option
     spread : ndarray, shape (3, len(PARAMETER_SPREAD))
         How far each mode moves [Hz] per plausible parameter change.
     """
-    from dataclasses import replace
-
     from taptune.model import ModelOptions, analyse, bending_bounds, build_model
 
     options = model_options or ModelOptions()
@@ -50,20 +50,67 @@ def model_expectation(assembly, params: HolderParams | None = None, model_option
 
 
 def analyse_for_assembly(recording, assembly=None, params: HolderParams | None = None, model_options=None,
-                         guidance=None, **kwargs):
+                         guidance=None, decide_labels: bool = True, **kwargs):
     """Analyse a recording; with an assembly, the model guides the bending labels.
 
     ``guidance`` is a :func:`model_expectation` result the caller already has (computed
-    here otherwise). Extra keyword arguments go to
+    here otherwise). When the labels are ambiguous (several plausible assignments, or a
+    loud peak the guidance left out), each is fitted on the fast model and the one the
+    model explains best is kept (:mod:`taptune.identify.labelfit`; ``decide_labels``
+    False keeps the guidance's choice). Extra keyword arguments go to
     :func:`taptune.signal.analysis.analyse_recording`.
     """
-    from taptune.signal.analysis import analyse_recording
+    from taptune.identify.labelfit import choose_labeling, relabelled
+    from taptune.signal.analysis import SpectrumOptions, analyse_recording
 
     if assembly is None:
         return analyse_recording(recording, **kwargs)
-    expected, bounds, spread = guidance or model_expectation(assembly, params, model_options)
+    guidance = guidance or model_expectation(assembly, params, model_options)
+    expected, bounds, spread = guidance
     kwargs.setdefault("interface", assembly.holder.interface)
-    return analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, spread_hz=spread, **kwargs)
+    analysis = analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, spread_hz=spread, **kwargs)
+    if not decide_labels:
+        return analysis
+    spectrum_options = kwargs.get("options") or SpectrumOptions()
+
+    def evaluator():
+        from taptune.model import ModelOptions
+        from taptune.model.reduced import FastEvaluator
+
+        return FastEvaluator(assembly, model_options or ModelOptions())
+
+    modes, warnings = choose_labeling(analysis, evaluator, guidance, analysis.excluded_bands_hz,
+                                      spectrum_options.labels)
+    if modes is None:
+        return analysis
+    current = [next((i for i, p in enumerate(analysis.peaks) if p.kind == "bending" and p.mode == m + 1), None)
+               for m in range(len(modes))]
+    if modes == current:
+        return replace(analysis, warnings=list(analysis.warnings) + warnings) if warnings else analysis
+    return relabelled(analysis, modes, warnings, analysis.excluded_bands_hz,
+                      refine=_full_refinement(recording, spectrum_options))
+
+
+def _full_refinement(recording, spectrum_options):
+    """``refine(peaks, indices)``: the full pole-fit frequency of the given peaks (the
+    analysis refined non-bending peaks only roughly)."""
+    from taptune.signal.analysis import find_spectral_peaks
+
+    def refine(peaks, indices):
+        r = find_spectral_peaks(recording, spectrum_options)
+        base = r["peaks"]
+        if not base:
+            return peaks
+        hz = np.array([q.hz for q in base])
+        match = {i: int(np.argmin(np.abs(hz - peaks[i].hz))) for i in indices}
+        effort = [0] * len(base)
+        for j in match.values():
+            effort[j] = 2
+        fine = r["refine"](base, effort)
+        return [replace(q, hz=fine[match[i]].hz, damping_ratio=fine[match[i]].damping_ratio) if i in match else q
+                for i, q in enumerate(peaks)]
+
+    return refine
 
 
 def identify_recordings(recordings, assemblies, options=None, progress=None, library_params=None):
@@ -117,4 +164,29 @@ def identification_record(recordings, assemblies, analyses, result) -> dict:
         out["recordings"] = [{k: v for k, v in f.items() if k != "warnings"} for f in per_file]
     out.update(result.to_dict())
     out["warnings"] = [w for f in per_file for w in f["warnings"]] + out["warnings"]
+    outlook = transfer_outlook(result, assemblies)
+    if outlook is not None:
+        from taptune.identify.bands import second_tap_advice
+
+        out["transfer_outlook"] = outlook.to_dict()
+        advice = second_tap_advice([outlook])
+        if advice:
+            out["warnings"].append(advice)
     return out
+
+
+def transfer_outlook(result, assemblies, offset_mm: float = 20.0):
+    """How well this identification transfers: the prediction (with its band) at the first
+    recording's stick-out + ``offset_mm`` (or − ``offset_mm`` / 2 when the tool cannot come
+    out that far); None when neither stick-out is valid."""
+    from taptune.errors import InputError
+    from taptune.identify.core import predict
+
+    base = assemblies[0]
+    for delta in (offset_mm, -offset_mm / 2):
+        try:
+            target = base.with_stickout(base.stickout + delta * 1e-3)
+        except InputError:
+            continue
+        return predict(result.param_sets, target, relative_floor=result.relative_floor, identified=list(assemblies))
+    return None

@@ -96,6 +96,29 @@ class Tool:
 
 
 @dataclass(frozen=True)
+class Tolerances:
+    """How well the user knows the geometry (optional assembly keys; used by the prediction bands).
+
+    stickout : float
+        ± stick-out [m] (``[setup] stickout_tolerance`` in mm; default 0.3 mm, a ruler).
+    diameter : float
+        ± relative holder outer diameters (``[holder] diameter_tolerance`` in %; default
+        1 %, measured roughly or taken from a catalogue drawing).
+    flute_ratio : float
+        ± flute ratio (``[tool] flute_ratio_tolerance``; default 0.05: the fluted part's
+        equivalent diameter is rarely known better).
+    """
+
+    stickout: float = 0.3e-3
+    diameter: float = 0.01
+    flute_ratio: float = 0.05
+
+    def to_dict(self) -> dict:
+        return {"stickout_mm": round(self.stickout / MM, 6), "diameter_percent": round(100 * self.diameter, 6),
+                "flute_ratio": round(self.flute_ratio, 6)}
+
+
+@dataclass(frozen=True)
 class Assembly:
     """One tool in one holder at one stick-out [m]. ``source`` names the file for messages."""
 
@@ -104,6 +127,7 @@ class Assembly:
     stickout: float
     source: str = "<assembly>"
     warnings: tuple[str, ...] = field(default=(), compare=False)
+    tolerances: Tolerances = field(default=Tolerances(), compare=False)
 
     @property
     def inserted_length(self) -> float:
@@ -397,7 +421,25 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
             flute_ratio=ratio,
         )
     stickout = r.number(s, "stickout", "[setup]") * MM
-    return validate(Assembly(holder=holder, tool=tool, stickout=stickout, source=source))
+    return validate(Assembly(holder=holder, tool=tool, stickout=stickout, source=source,
+                             tolerances=_tolerances(r, h, t, s)))
+
+
+def _tolerances(r: "_Reader", h: dict, t: dict, s: dict) -> Tolerances:
+    """The optional geometry tolerances, validated (a negative or absurd one is a typo)."""
+    d = Tolerances()
+    checks = (
+        (s, "stickout_tolerance", "[setup]", d.stickout / MM, 20.0, "mm (how far the stick-out may be off; ruler ≈ 0.3–0.5)"),
+        (h, "diameter_tolerance", "[holder]", 100 * d.diameter, 10.0, "% (how far the holder diameters may be off; calipers ≈ 0.2, catalogue ≈ 1)"),
+        (t, "flute_ratio_tolerance", "[tool]", d.flute_ratio, 0.5, "(how far the flute ratio may be off; typical 0.05)"),
+    )
+    values = []
+    for table, key, where, default, top, unit in checks:
+        v = r.number(table, key, where, default)
+        if not 0 <= v <= top:
+            r.fail(f"{where} {key}", f"must lie in [0, {top:g}] {unit}, got {v:g}")
+        values.append(v)
+    return Tolerances(stickout=values[0] * MM, diameter=values[1] / 100, flute_ratio=values[2])
 
 
 def _loads(text: str, source: str) -> dict:
@@ -489,13 +531,18 @@ def tool_to_toml(tool: Tool) -> str:
 
 
 def assembly_to_toml(asm: Assembly) -> str:
-    """An assembly file that :func:`load_assembly` reads back to the same geometry."""
-    return (
-        holder_to_toml(asm.holder)
-        + "\n"
-        + tool_to_toml(asm.tool)
-        + f"\n[setup]\nstickout = {_fmt(asm.stickout / MM)}\n"
-    )
+    """An assembly file that :func:`load_assembly` reads back to the same geometry (and tolerances)."""
+    tol, d = asm.tolerances, Tolerances()
+    text = holder_to_toml(asm.holder)
+    if tol.diameter != d.diameter:
+        text += f"diameter_tolerance = {_fmt(100 * tol.diameter)}\n"
+    text += "\n" + tool_to_toml(asm.tool)
+    if tol.flute_ratio != d.flute_ratio and asm.tool.flute_ratio is not None:
+        text += f"flute_ratio_tolerance = {_fmt(tol.flute_ratio)}\n"
+    text += f"\n[setup]\nstickout = {_fmt(asm.stickout / MM)}\n"
+    if tol.stickout != d.stickout:
+        text += f"stickout_tolerance = {_fmt(tol.stickout / MM)}\n"
+    return text
 
 
 def material_to_dict(m: Material) -> dict:

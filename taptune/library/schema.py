@@ -656,12 +656,26 @@ class HolderEntry:
 
         return max([fit_misfit(r.bending_measured_hz, r.bending_model_hz) for r in self.identifications] or [5e-4])
 
+    def identified_assemblies(self) -> list[Assembly]:
+        """The assemblies of this holder's identifications (the band's Δ stick-out and
+        the identification side of its geometry part); records that no longer form a
+        valid assembly are left out."""
+        out = []
+        for r in self.identifications:
+            try:
+                out.append(self.assembly(r.tool, r.stickout_mm))
+            except InputError:
+                continue
+        return out
+
     def predict(self, assembly):
-        """Bending modes with spread of this holder in ``assembly`` (an identify Prediction):
+        """Bending modes with the honest ± band of this holder in ``assembly`` (an identify
+        Prediction; ``bending_hz_spread`` is the band's half-width, ``band`` its make-up):
         the one way the CLI, the library commands and the GUI predict from the library."""
         from taptune.identify import predict
 
-        return predict(self.prediction_sets(), assembly, self.options(), relative_floor=self.relative_floor())
+        return predict(self.prediction_sets(), assembly, self.options(), relative_floor=self.relative_floor(),
+                       identified=self.identified_assemblies())
 
     def spread(self) -> dict[str, float]:
         """± half-width of each parameter over the best and the near-optimal sets (library units)."""

@@ -149,7 +149,15 @@ class LabelOptions:
         Without model guidance, bending guesses are taken above this frequency
         (free-free tool-holder assemblies have f1 of a few kHz).
     max_candidates : int
-        Candidates per mode considered (the nearest to the expected frequency).
+        Candidates per mode considered (the nearest to the expected frequency); loud
+        peaks inside the mode's bounds are considered too, however far.
+    loud_prominence_db, loud_level_db : float
+        A peak at least this prominent and this loud (re the loudest peak of the
+        recording), outside the interface bands, is *loud*: a tip tap excites bending
+        modes far more than anything else, so it is rarely spurious.
+    unexplained_cost : float
+        Cost of leaving a loud peak unassigned while a mode whose bounds hold it is
+        missing (MODEL.md §8.3: a band or a distant guess must not silently drop it).
     """
 
     # Defaults chosen on synthetic recordings of random holders (the model's tip
@@ -163,6 +171,9 @@ class LabelOptions:
     weak_prominence_db: float = 12.0
     min_guess_hz: float = 1000.0
     max_candidates: int = 8
+    loud_prominence_db: float = 20.0
+    loud_level_db: float = -12.0
+    unexplained_cost: float = 2.0
 
 
 def _explain_cost(r, basis, sigma_mode: float) -> float:
@@ -178,6 +189,112 @@ def _explain_cost(r, basis, sigma_mode: float) -> float:
 def _missing(o: LabelOptions, mode_index: int) -> float:
     costs = tuple(np.atleast_1d(o.missing_cost))
     return float(costs[min(mode_index, len(costs) - 1)])
+
+
+@dataclass(frozen=True)
+class Labeling:
+    """One assignment of peaks to bending modes and what it costs.
+
+    modes : tuple of (int or None)
+        Index into the peaks per mode, None where the mode is left unassigned.
+    cost : float
+        Total cost (lower is more plausible).
+    prior : float
+        The part that comes from the model guidance (how well the nominal explanation
+        accounts for the chosen frequencies): a fit of the labeling replaces it.
+    """
+
+    modes: tuple
+    cost: float
+    prior: float
+
+    @property
+    def label_cost(self) -> float:
+        """The cost without the guidance's explanation: missing modes, band, weak and loud peaks."""
+        return self.cost - self.prior
+
+
+def _loud(peaks: list[Peak], ok, bands, options: LabelOptions) -> list[bool]:
+    """Peaks too loud to leave unexplained: clear, outside the interface bands, candidates."""
+    return [bool(ok[i]) and not in_bands(p.hz, bands) and p.prominence_db >= options.loud_prominence_db
+            and p.level_db >= options.loud_level_db for i, p in enumerate(peaks)]
+
+
+def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
+                     candidates=None, spread_hz=None, options: LabelOptions = LabelOptions(),
+                     keep: int = 1, must_try=()) -> list[Labeling]:
+    """The most plausible joint assignments of peaks to bending modes, best first.
+
+    Parameters are those of :func:`assign_bending`; ``keep`` labelings are returned
+    (fewer if fewer exist). ``must_try`` lists peak indices for which the best labeling
+    that uses each of them, among those assigning the most modes, is appended (if not already among the kept): a prominent
+    peak far from where the guidance expects a mode must stay a candidate for the
+    fit to judge (MODEL.md §8.3: the model decides).
+    """
+    e = np.asarray(expected_hz, dtype=np.float64)
+    n = e.size
+    if bounds_hz is None:
+        bnd = np.column_stack([e / 1.3, e * 1.3])
+        rigid = e * 1.05
+    else:
+        bnd = np.asarray(bounds_hz, dtype=np.float64).reshape(n, 2)
+        # The upper bound is the rigid contact with the stiffest, lightest holder
+        # material of the search space (MODEL.md §7.6): take the material factor out.
+        rigid = bnd[:, 1] / UPPER_BOUND_MATERIAL
+    # Each mode's sensitivity to the contact: log-distance from nominal to rigid contact
+    # (the tool's modes move a lot with the contact, a holder mode hardly).
+    w = np.maximum(np.log(np.maximum(rigid, e) / e), 0.005)
+    if spread_hz is not None:
+        basis = np.log1p(np.asarray(spread_hz, dtype=np.float64).reshape(n, -1) / e[:, None])
+        sigma = options.sigma_mode_spread
+    else:
+        basis = np.column_stack([np.full(n, options.sigma_common), options.sigma_contact * w])
+        sigma = options.sigma_mode
+    ok = [True] * len(peaks) if candidates is None else list(candidates)
+    hz = np.array([p.hz for p in peaks])
+    loud = _loud(peaks, ok, bands, options)
+    per_mode = []
+    for m in range(n):
+        idx = [i for i in range(len(peaks)) if ok[i] and bnd[m, 0] <= hz[i] <= bnd[m, 1]]
+        idx.sort(key=lambda i: abs(np.log(hz[i] / e[m])))
+        # The nearest few, and every loud one wherever it lies inside the bounds.
+        near = idx[:options.max_candidates]
+        per_mode.append(near + [i for i in idx[options.max_candidates:] if loud[i]] + [None])
+    unit = np.array([
+        (options.band_cost if in_bands(p.hz, bands) else 0.0)
+        + max(0.0, (options.weak_prominence_db - p.prominence_db) / options.weak_prominence_db)
+        for p in peaks
+    ])
+    found: list[Labeling] = []
+    for combo in itertools.product(*per_mode):
+        chosen = [(m, i) for m, i in enumerate(combo) if i is not None]
+        fs = [hz[i] for _, i in chosen]
+        if any(b <= a for a, b in zip(fs, fs[1:])):
+            continue  # modes are ordered and distinct
+        cost = sum(_missing(options, m) for m, i in enumerate(combo) if i is None)
+        prior = 0.0
+        if chosen:
+            ms = np.array([m for m, _ in chosen])
+            prior = _explain_cost(np.log(np.array(fs) / e[ms]), basis[ms], sigma)
+            cost += prior + float(sum(unit[i] for _, i in chosen))
+        # A loud peak left unexplained inside the bounds of a mode left unassigned
+        # (between its assigned neighbours) costs: it is most likely that mode.
+        for m, i in enumerate(combo):
+            if i is not None:
+                continue
+            lo = max([hz[j] for mm, j in chosen if mm < m] + [bnd[m, 0]])
+            hi = min([hz[j] for mm, j in chosen if mm > m] + [bnd[m, 1]])
+            if any(loud[k] and lo < hz[k] < hi and k not in combo for k in range(len(peaks))):
+                cost += options.unexplained_cost
+        found.append(Labeling(tuple(combo), float(cost), float(prior)))
+    found.sort(key=lambda lab: lab.cost)
+    out = found[:max(keep, 1)]
+    for k in must_try:
+        if not any(k in lab.modes for lab in out):
+            using = [lab for lab in found if k in lab.modes]
+            # The fullest labeling with it: the fit judges the peak alongside the others.
+            out += sorted(using, key=lambda lab: (-sum(i is not None for i in lab.modes), lab.cost))[:1]
+    return out
 
 
 def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
@@ -210,51 +327,9 @@ def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
     list of (int or None), length n
         Index into ``peaks`` per mode, None where no peak is assigned.
     """
-    e = np.asarray(expected_hz, dtype=np.float64)
-    n = e.size
-    if bounds_hz is None:
-        bnd = np.column_stack([e / 1.3, e * 1.3])
-        rigid = e * 1.05
-    else:
-        bnd = np.asarray(bounds_hz, dtype=np.float64).reshape(n, 2)
-        # The upper bound is the rigid contact with the stiffest, lightest holder
-        # material of the search space (MODEL.md §7.6): take the material factor out.
-        rigid = bnd[:, 1] / UPPER_BOUND_MATERIAL
-    # Each mode's sensitivity to the contact: log-distance from nominal to rigid contact
-    # (the tool's modes move a lot with the contact, a holder mode hardly).
-    w = np.maximum(np.log(np.maximum(rigid, e) / e), 0.005)
-    if spread_hz is not None:
-        basis = np.log1p(np.asarray(spread_hz, dtype=np.float64).reshape(n, -1) / e[:, None])
-        sigma = options.sigma_mode_spread
-    else:
-        basis = np.column_stack([np.full(n, options.sigma_common), options.sigma_contact * w])
-        sigma = options.sigma_mode
-    ok = [True] * len(peaks) if candidates is None else list(candidates)
-    hz = np.array([p.hz for p in peaks])
-    per_mode = []
-    for m in range(n):
-        idx = [i for i in range(len(peaks)) if ok[i] and bnd[m, 0] <= hz[i] <= bnd[m, 1]]
-        idx.sort(key=lambda i: abs(np.log(hz[i] / e[m])))
-        per_mode.append(idx[:options.max_candidates] + [None])
-    unit = np.array([
-        (options.band_cost if in_bands(p.hz, bands) else 0.0)
-        + max(0.0, (options.weak_prominence_db - p.prominence_db) / options.weak_prominence_db)
-        for p in peaks
-    ])
-    best, best_cost = [None] * n, np.inf
-    for combo in itertools.product(*per_mode):
-        chosen = [(m, i) for m, i in enumerate(combo) if i is not None]
-        fs = [hz[i] for _, i in chosen]
-        if any(b <= a for a, b in zip(fs, fs[1:])):
-            continue  # modes are ordered and distinct
-        cost = sum(_missing(options, m) for m, i in enumerate(combo) if i is None)
-        if chosen:
-            ms = np.array([m for m, _ in chosen])
-            r = np.log(np.array(fs) / e[ms])
-            cost += _explain_cost(r, basis[ms], sigma) + float(sum(unit[i] for _, i in chosen))
-        if cost < best_cost:
-            best, best_cost = list(combo), cost
-    return best
+    best = ranked_labelings(peaks, expected_hz, bounds_hz, bands, candidates=candidates,
+                            spread_hz=spread_hz, options=options)
+    return list(best[0].modes) if best else [None] * len(np.atleast_1d(expected_hz))
 
 
 def interface_growth(peaks: list[Peak], iface_peaks: list[Peak], tol_rel: float = 2e-3,
@@ -331,27 +406,57 @@ def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None
         if pool:
             warnings.append("no assembly given: the bending labels are a best guess "
                             "(the most prominent peaks outside the interface band)")
+    out = apply_labels(peaks, modes, use_bands, stationary=stat, grown=grown,
+                       source="model" if expected_hz is not None else "guess")
+    warnings.extend(missing_warnings(modes, n_sought))
+    return out, warnings
+
+
+#: Notes of the peaks that can never be bending (see :func:`label_candidates`).
+NOTE_STATIONARY = "stationary (hum or noise)"
+NOTE_GROWN = "grows on the interface tap"
+
+
+def apply_labels(peaks: list[Peak], modes, bands=(), *, stationary=None, grown=None,
+                 source: str = "model") -> list[Peak]:
+    """The peaks with ``kind``, ``mode`` and ``note`` set for one bending assignment.
+
+    ``modes`` holds the index into ``peaks`` per bending mode (None: unassigned);
+    ``source`` says who chose them (``model``, ``guess``, ``fit``) in the note.
+    """
+    stat = [False] * len(peaks) if stationary is None else list(stationary)
+    grow = [False] * len(peaks) if grown is None else list(grown)
     mode_of = {i: m + 1 for m, i in enumerate(modes) if i is not None}
     out = []
     for i, pk in enumerate(peaks):
         if i in mode_of:
-            note = "bending (model)" if expected_hz is not None else "bending (guess)"
-            if in_bands(pk.hz, use_bands):
+            note = f"bending ({source})"
+            if in_bands(pk.hz, bands):
                 note += ", inside the interface band"
             out.append(replace(pk, kind="bending", mode=mode_of[i], note=note))
-        elif grown[i]:
-            out.append(replace(pk, kind="local", mode=None, note="grows on the interface tap"))
+        elif grow[i]:
+            out.append(replace(pk, kind="local", mode=None, note=NOTE_GROWN))
         elif stat[i]:
-            out.append(replace(pk, kind="other", mode=None, note="stationary (hum or noise)"))
-        elif in_bands(pk.hz, use_bands):
+            out.append(replace(pk, kind="other", mode=None, note=NOTE_STATIONARY))
+        elif in_bands(pk.hz, bands):
             out.append(replace(pk, kind="local", mode=None, note="interface band"))
         else:
             out.append(replace(pk, kind="other", mode=None, note=""))
-    found = sorted(mode_of.values())
+    return out
+
+
+def missing_warnings(modes, n_sought: int) -> list[str]:
+    """The warning when fewer than ``n_sought`` bending modes are assigned."""
+    found = sorted(m + 1 for m, i in enumerate(modes) if i is not None)
     if not found:
-        warnings.append("no bending peak found")
-    elif len(found) < n_sought:
+        return ["no bending peak found"]
+    if len(found) < n_sought:
         missing = [m for m in range(1, n_sought + 1) if m not in found]
-        warnings.append(f"only {len(found)} of {n_sought} bending modes found "
-                        f"(missing mode {', '.join(map(str, missing))})")
-    return out, warnings
+        return [f"only {len(found)} of {n_sought} bending modes found "
+                f"(missing mode {', '.join(map(str, missing))})"]
+    return []
+
+
+def label_candidates(peaks: list[Peak]) -> tuple[list[bool], list[bool]]:
+    """(stationary, grown) flags recovered from labelled peaks' notes."""
+    return [p.note == NOTE_STATIONARY for p in peaks], [p.note == NOTE_GROWN for p in peaks]

@@ -1,0 +1,1 @@
+"""Benchmarks of taptune: scripts that print figures, not tests (``python -m benchmarks.<name>``)."""

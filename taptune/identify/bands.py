@@ -1,0 +1,225 @@
+"""Honest prediction bands: how far a predicted bending frequency may be from the truth.
+
+A prediction's ± half-width is a documented composition of three independent parts,
+per mode, in Hz::
+
+    half_width = sqrt(set² + geometry² + model_form²)
+
+* **set** — the near-optimal parameter sets (MODEL.md §8.6): the largest deviation of any
+  of them from the best fit, at least the fit's own misfit (≥ 0.05 %). What the tap
+  cannot tell apart.
+* **geometry** — the user's stated tolerances (optional assembly keys, see
+  :class:`taptune.io.assembly.Tolerances`) propagated through the model's finite-difference
+  sensitivities at the best parameters. A stick-out is read off a ruler afresh for every
+  setup, so its error at the prediction counts in full, and so does the error at each
+  identification (averaged over several). Holder diameters and the flute ratio are the
+  same wrong numbers at the identification and at the prediction: the identified
+  parameters absorb most of their effect, so only the *change* of relative sensitivity
+  between the identified and the predicted assembly counts.
+* **model form** — what the model itself cannot represent (a contact pressure that is
+  not linear along the grip, a collet nut or a coolant tube the file leaves out, an
+  asymmetric holder): ``c_mode × f × (1 + Δ/10 mm)`` with Δ the stick-out change from the
+  nearest identification, calibrated by split-conformal prediction on a corpus of
+  holders outside the model family (:data:`MODEL_FORM`; ``benchmarks/calibrate_bands.py``).
+
+The calibration targets 90 % coverage per mode; the validation split, never used to
+calibrate, measures it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from taptune.io.assembly import Segment, Tolerances
+
+#: Model-form coefficients c_mode (relative, per mode 1–3) of ``c × f × (1 + Δ/DELTA_REF)``.
+#: Split-conformal 90 % quantiles on the realism corpus (benchmarks/realism, split
+#: "calibration"); see :data:`CALIBRATION` and ``benchmarks/calibrate_bands.py``.
+MODEL_FORM = (0.0, 0.0, 0.0)
+DELTA_REF_MM = 10.0
+#: Stick-out change assumed when the identified stick-outs are unknown [mm].
+DELTA_UNKNOWN_MM = 20.0
+COVERAGE = 0.90
+CALIBRATION = "not calibrated"
+METHOD = "sqrt(set^2 + geometry^2 + model_form^2)"
+#: A single-recording band wider than this (relative) suggests a second tap.
+WIDE_BAND = 0.01
+
+
+@dataclass(frozen=True)
+class Band:
+    """The make-up of a prediction's ± half-widths, per mode [Hz].
+
+    Attributes
+    ----------
+    half_width_hz : tuple of float
+        The final ± half-width (= ``Prediction.bending_hz_spread``).
+    set_hz, geometry_hz, model_form_hz : tuple of float
+        The three components (see the module docstring).
+    geometry_parts_hz : dict
+        Per tolerance (``stickout``, ``stickout_identified``, ``diameter``, ``flute_ratio``).
+    delta_stickout_mm : float or None
+        Stick-out change from the nearest identification (None: unknown).
+    recordings : int
+        Identifications the holder's parameters come from.
+    tolerances : Tolerances
+    """
+
+    half_width_hz: tuple[float, ...]
+    set_hz: tuple[float, ...]
+    geometry_hz: tuple[float, ...]
+    model_form_hz: tuple[float, ...]
+    geometry_parts_hz: dict
+    delta_stickout_mm: float | None
+    recordings: int
+    tolerances: Tolerances
+    coverage: float = COVERAGE
+    method: str = METHOD
+    calibration: str = CALIBRATION
+
+    def relative(self, bending_hz) -> np.ndarray:
+        """Half-widths relative to the frequencies."""
+        return np.asarray(self.half_width_hz) / np.asarray(bending_hz)[: len(self.half_width_hz)]
+
+    def wide(self, bending_hz) -> bool:
+        """Whether the band is wide enough that a second tap at another stick-out would pay."""
+        return bool(np.max(self.relative(bending_hz)) > WIDE_BAND)
+
+    def to_dict(self) -> dict:
+        r = lambda v: [round(float(x), 2) for x in v]  # noqa: E731
+        return {
+            "half_width_hz": r(self.half_width_hz),
+            "components_hz": {"set": r(self.set_hz), "geometry": r(self.geometry_hz),
+                              "model_form": r(self.model_form_hz)},
+            "geometry_parts_hz": {k: r(v) for k, v in self.geometry_parts_hz.items()},
+            "tolerances": self.tolerances.to_dict(),
+            "delta_stickout_mm": None if self.delta_stickout_mm is None else round(self.delta_stickout_mm, 3),
+            "recordings": self.recordings,
+            "method": self.method,
+            "coverage_target": self.coverage,
+            "calibration": self.calibration,
+        }
+
+    def text(self, bending_hz) -> str:
+        """How sure the prediction is, in plain words (one paragraph)."""
+        rel = 100 * self.relative(bending_hz)
+        parts = np.array([self.set_hz, self.geometry_hz, self.model_form_hz]) ** 2
+        names = ("what the tap cannot tell apart", "the stated geometry tolerances", "what the model leaves out")
+        main = names[int(np.argmax(parts.sum(axis=1)))]
+        where = ("" if self.delta_stickout_mm is None
+                 else f" {self.delta_stickout_mm:.0f} mm from the tapped stick-out,")
+        return (f"Each ± holds the true frequency in about {100 * self.coverage:.0f} of 100 such predictions:{where} "
+                f"{rel.min():.1f}–{rel.max():.1f} % of the frequency, mostly from {main}.")
+
+
+def second_tap_advice(predictions) -> str | None:
+    """Advice to tap again when a band from a single recording is wide, else None."""
+    wide = [p for p in predictions if p.band is not None and p.band.recordings < 2 and p.band.wide(p.bending_hz)]
+    if not wide:
+        return None
+    worst = max(float(np.max(p.band.relative(p.bending_hz))) for p in wide)
+    return (f"one recording only: the bands reach ±{100 * worst:.1f} %; tap the same holder once more at a "
+            f"stick-out about 20 mm different and identify both recordings together (taptune identify "
+            f"A.wav B.wav --assembly A.toml B.toml) to narrow them")
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+def _with_stickout(asm, delta):
+    return asm.with_stickout(asm.stickout + delta)
+
+
+def _with_diameters(asm, rel):
+    h = asm.holder
+    segs = tuple(Segment(s.length, s.od * (1 + rel), s.id) for s in h.segments)
+    return asm.with_holder(replace(h, segments=segs))
+
+
+def _with_flute_ratio(asm, delta):
+    t = asm.tool
+    if t.flute_ratio is None or t.flute_diameter is None or len(t.segments) != 2:
+        return None
+    ratio = t.flute_ratio + delta
+    flute = Segment(t.segments[1].length, ratio * t.flute_diameter, t.segments[1].id)
+    return replace(asm, tool=replace(t, segments=(t.segments[0], flute), flute_ratio=ratio))
+
+
+def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3) -> dict:
+    """Relative change of f1..fn [–] per stated tolerance, by central differences.
+
+    Returns
+    -------
+    dict
+        ``{"stickout" | "diameter" | "flute_ratio": ndarray (n_modes,)}``: Δf/f for a
+        change by one tolerance (absent when the tolerance is 0 or does not apply).
+    """
+    from taptune.errors import InputError
+    from taptune.model import build_model, solve_modes
+
+    def freqs(asm):
+        return np.asarray(solve_modes(build_model(asm, model_options), params, n_modes=n_modes).frequency_hz[:n_modes])
+
+    out = {}
+    moves = (("stickout", _with_stickout, tolerances.stickout), ("diameter", _with_diameters, tolerances.diameter),
+             ("flute_ratio", _with_flute_ratio, tolerances.flute_ratio))
+    base = None
+    for name, move, tol in moves:
+        if tol <= 0:
+            continue
+        try:
+            up, down = move(assembly, tol), move(assembly, -tol)
+        except InputError:
+            continue  # e.g. the stick-out cannot grow by the tolerance: leave that part out
+        if up is None or down is None:
+            continue
+        if base is None:
+            base = freqs(assembly)
+        out[name] = (freqs(up) - freqs(down)) / 2 / base
+    return out
+
+
+def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz) -> tuple[np.ndarray, dict]:
+    """The geometry component [Hz] per mode and its parts (see the module docstring)."""
+    f = np.asarray(bending_hz, dtype=float)
+    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size)
+    parts = {}
+    if "stickout" in pred:
+        parts["stickout"] = np.abs(pred["stickout"]) * f
+    if identified:
+        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size) for a in identified]
+        so = [s["stickout"] for s in ids if "stickout" in s]
+        if so:
+            # Independent ruler errors, one per recording: their mean error enters.
+            parts["stickout_identified"] = np.sqrt(np.mean(np.square(so), axis=0) / len(so)) * f
+        for name in ("diameter", "flute_ratio"):
+            diffs = [pred[name] - s[name] for s in ids if name in s and name in pred]
+            if diffs:
+                parts[name] = np.min(np.abs(diffs), axis=0) * f
+    total = np.sqrt(sum(v ** 2 for v in parts.values())) if parts else np.zeros_like(f)
+    return total, parts
+
+
+def delta_stickout_mm(assembly, identified) -> float | None:
+    """Stick-out change from the nearest identified assembly with the same tool [mm]
+    (any tool when none matches); None when nothing is known."""
+    if not identified:
+        return None
+    same = [a for a in identified if a.tool.name == assembly.tool.name] or list(identified)
+    return float(min(abs(assembly.stickout - a.stickout) for a in same) * 1e3)
+
+
+def model_form_term(bending_hz, delta_mm: float | None, coefficients=MODEL_FORM) -> np.ndarray:
+    """``c_mode × f × (1 + Δ/DELTA_REF_MM)`` [Hz] per mode."""
+    f = np.asarray(bending_hz, dtype=float)
+    d = DELTA_UNKNOWN_MM if delta_mm is None else delta_mm
+    c = np.asarray(coefficients, dtype=float)
+    c = np.concatenate([c, np.full(max(f.size - c.size, 0), c[-1])])[: f.size]
+    return c * f * (1 + d / DELTA_REF_MM)
+
+
+def compose(set_hz, geometry_hz, model_form_hz) -> np.ndarray:
+    """The half-width from its independent parts."""
+    return np.sqrt(np.square(set_hz) + np.square(geometry_hz) + np.square(model_form_hz))

@@ -1,0 +1,243 @@
+"""Labels the model decides: when the peak labels are ambiguous, fit each plausible labeling.
+
+The signal layer ranks joint assignments of peaks to bending modes by how well the
+model *guidance* (nominal or library parameters, linearised spreads) explains them
+(:func:`taptune.signal.labels.ranked_labelings`). Far from the nominal holder — a
+contact pressure that is not linear along the grip, parameters at an edge of the
+published range, a roughly measured geometry — the linearised explanation can favour
+leaving a mode out over taking a loud peak where the nominal model did not expect it.
+So the few plausible labelings are each fitted, frequency only, on the fast reduced
+model: a maximum-a-posteriori fit of the frequency-setting parameters (k_tt, k_rr, alpha,
+holder density and modulus) with a prior spread per parameter and a model-form
+tolerance per frequency. The labeling whose fit costs least (fit + missing modes +
+band and weak-peak costs) wins, and the warnings say so when it was a close call or
+overrode the guidance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from taptune.model.params import NOMINAL, P_LOWER, P_UPPER, to_p
+from taptune.signal.labels import (LabelOptions, Labeling, apply_labels, label_candidates,
+                                   missing_warnings, ranked_labelings)
+
+#: Frequency-setting parameters (indices into p, MODEL.md §8.1) and their prior spread:
+#: the published holders lie within about one spread of the nominal values (k_tt and
+#: k_rr in decades, alpha in %, the factors absolute). The loss intensities hardly move
+#: the frequencies and stay nominal.
+PRIOR_SPREAD = ((0, 0.5), (1, 1.0), (4, 15.0), (5, 0.03), (6, 0.05))
+
+
+@dataclass(frozen=True)
+class LabelFitOptions:
+    """How the plausible labelings are compared.
+
+    sigma_model : float
+        Relative frequency tolerance of the fit: holders outside the model family
+        (contact pressure not linear along the grip, a nut the file leaves out) are off
+        by about 1 % in ways the five parameters cannot absorb.
+    sigma_level_db, radiation_exponent : float
+        Tolerance of a mode's relative loudness and the sound's tilt f^p
+        (:func:`level_cost`; radiation, microphone and tap force make ~±6 dB).
+    keep : int
+        Labelings taken from the guidance ranking (plus the best one using each loud
+        peak the best left out).
+    max_extra_cost : float
+        Labelings costing this much more than the best under the guidance are not fitted.
+    close : float
+        Fit-score difference below which the choice is reported as a close call.
+    """
+
+    sigma_model: float = 0.01
+    sigma_level_db: float = 6.0
+    radiation_exponent: float = 1.75
+    keep: int = 4
+    max_extra_cost: float = 8.0
+    close: float = 1.0
+
+
+@dataclass(frozen=True)
+class LabelChoice:
+    """The fitted score of one labeling (lower is better)."""
+
+    labeling: Labeling
+    score: float
+    model_hz: tuple[float, ...]
+
+
+def quick_fit(evaluator, measured: dict[int, float], sigma: float = 0.01) -> tuple[float, np.ndarray, np.ndarray]:
+    """MAP fit of the frequency-setting parameters to measured bending frequencies.
+
+    Parameters
+    ----------
+    evaluator : FastEvaluator-like
+        ``evaluate(p, window_hz).bending_hz`` gives f1–f3 [Hz].
+    measured : dict
+        {mode (1-based): frequency [Hz]}.
+    sigma : float
+        Relative frequency tolerance.
+
+    Returns
+    -------
+    cost : float
+        Σ((f_model/f_meas − 1)/σ)² + Σ((p − p_nominal)/spread)² at the optimum.
+    model_hz : ndarray, shape (3,)
+        The fitted model's f1–f3 [Hz].
+    p : ndarray, shape (7,)
+        The fitted parameter vector.
+    """
+    from scipy.optimize import least_squares
+
+    p0 = to_p(NOMINAL)
+    idx = np.array([i for i, _ in PRIOR_SPREAD])
+    scale = np.array([s for _, s in PRIOR_SPREAD])
+    modes = np.array(sorted(measured)) - 1
+    f_meas = np.array([measured[m + 1] for m in modes])
+    window = np.array([1000.0])
+
+    def p_of(x):
+        p = p0.copy()
+        p[idx] = p0[idx] + x * scale
+        return p
+
+    def residuals(x):
+        f = np.asarray(evaluator.evaluate(p_of(x), window).bending_hz, dtype=float)
+        return np.concatenate([(f[modes] / f_meas - 1) / sigma, x])
+
+    lo = (P_LOWER[idx] - p0[idx]) / scale
+    hi = (P_UPPER[idx] - p0[idx]) / scale
+    best = None
+    # Nominal, a soft and a stiff contact: the frequencies saturate in the contact
+    # stiffness, so one start can stall on a plateau.
+    for start in (0.0, -1.0, 1.0):
+        x0 = np.clip(np.full(idx.size, 0.0) + np.where(idx < 2, start, 0.0), lo + 1e-6, hi - 1e-6)
+        try:
+            r = least_squares(residuals, x0, bounds=(lo, hi), x_scale=1.0, diff_step=1e-3, max_nfev=60)
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        cost = float(r.fun @ r.fun)
+        if best is None or cost < best[0]:
+            best = (cost, r.x)
+    if best is None:
+        return np.inf, np.full(3, np.nan), p0
+    f = np.asarray(evaluator.evaluate(p_of(best[1]), window).bending_hz, dtype=float)
+    return best[0], f, p_of(best[1])
+
+
+def level_cost(evaluator, p, peaks_by_mode: dict, options: "LabelFitOptions") -> float:
+    """How well the fitted model explains the peaks' relative loudness.
+
+    A mode's peak in the tip receptance is |φ_tip|²/(ω²·2ζ); the sound tilts it by about
+    f^radiation_exponent, and the peak's own decay (the measured ζ, when the pole fit gave
+    one) replaces the model's damping, which the frequency-only fit does not know. The
+    levels are compared up to a common offset (unknown tap force and microphone gain):
+    Σ((ΔL_measured − ΔL_model)/σ_level)² over the assigned modes, mean removed.
+    """
+    modes = sorted(peaks_by_mode)
+    if len(modes) < 2:
+        return 0.0
+    e = evaluator.evaluate(p, np.array([1000.0]))
+    f_model = np.asarray(e.bending_hz, dtype=float)
+    h = np.abs(np.asarray(evaluator.evaluate(p, f_model).tip_receptance))
+    resid = []
+    for m in modes:
+        pk = peaks_by_mode[m]
+        zeta_model = float(e.damping_ratio[m - 1])
+        zeta = pk.damping_ratio if pk.damping_ratio and pk.damping_ratio > 0 else zeta_model
+        model_db = 20 * np.log10(h[m - 1] * zeta_model / zeta * f_model[m - 1] ** options.radiation_exponent)
+        resid.append(pk.level_db - model_db)
+    r = np.asarray(resid) - np.mean(resid)
+    return float(np.sum((r / options.sigma_level_db) ** 2))
+
+
+def _describe(lab: Labeling, peaks) -> str:
+    parts = [f"mode {m + 1} = {peaks[i].hz:.0f} Hz" if i is not None else f"mode {m + 1} unassigned"
+             for m, i in enumerate(lab.modes)]
+    return ", ".join(parts)
+
+
+def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: LabelOptions = LabelOptions(),
+                    options: LabelFitOptions = LabelFitOptions()):
+    """Re-decide an analysis' bending labels by fitting each plausible labeling.
+
+    Parameters
+    ----------
+    analysis : SpectrumAnalysis
+        Labelled by the guidance.
+    evaluator_of : callable
+        ``evaluator_of()`` returns the assembly's fast evaluator (built only when needed).
+    guidance : (expected, bounds, spread)
+        :func:`taptune.identify.pipeline.model_expectation`.
+    bands : sequence of (lo, hi)
+        The interface bands used for the labels.
+
+    Returns
+    -------
+    modes : list of (int or None) or None
+        Peak index per mode of the chosen labeling; None when there was nothing to decide.
+    warnings : list of str
+    """
+    expected, bounds, spread = guidance
+    peaks = analysis.peaks
+    stat, grown = label_candidates(peaks)
+    cand = [not s and not g for s, g in zip(stat, grown)]
+    current = tuple(next((i for i, p in enumerate(peaks) if p.kind == "bending" and p.mode == m + 1), None)
+                    for m in range(len(expected)))
+    ranked = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
+                              options=label_options, keep=options.keep)
+    loud = [i for i, p in enumerate(peaks) if cand[i] and p.prominence_db >= label_options.loud_prominence_db
+            and p.level_db >= label_options.loud_level_db]
+    extra = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
+                             options=label_options, keep=1, must_try=loud)[1:]
+    if not ranked:
+        return None, []
+    best_cost = ranked[0].cost
+    pool = [lab for lab in ranked if lab.cost - best_cost <= options.max_extra_cost]
+    pool += [lab for lab in extra if lab.modes not in {q.modes for q in pool}]
+    # A fit always improves when a mode is left out; it may add or swap peaks, never
+    # drop one the guidance took.
+    n_current = sum(i is not None for i in current)
+    pool = [lab for lab in pool if sum(i is not None for i in lab.modes) >= n_current]
+    if len(pool) < 2:
+        return None, []
+    evaluator = evaluator_of()
+    choices = []
+    for lab in pool:
+        chosen = {m + 1: peaks[i] for m, i in enumerate(lab.modes) if i is not None}
+        if not chosen:
+            continue
+        fit, model_hz, p = quick_fit(evaluator, {m: pk.hz for m, pk in chosen.items()}, options.sigma_model)
+        score = fit + level_cost(evaluator, p, chosen, options) + lab.label_cost
+        choices.append(LabelChoice(lab, score, tuple(map(float, model_hz))))
+    if not choices:
+        return None, []
+    choices.sort(key=lambda c: c.score)
+    best, runner = choices[0], choices[1] if len(choices) > 1 else None
+    warnings = []
+    overrode = best.labeling.modes != current
+    if runner is not None and (overrode or runner.score - best.score < options.close):
+        better = 100 * (1 - best.score / runner.score) if runner.score > 0 else 0.0
+        warnings.append(
+            f"{analysis.file or 'recording'}: labels were ambiguous: chose {_describe(best.labeling, peaks)} "
+            f"(the fitted model explains it {better:.0f} % better than {_describe(runner.labeling, peaks)})")
+    return list(best.labeling.modes), warnings
+
+
+def relabelled(analysis, modes, warnings, bands=(), refine=None):
+    """``analysis`` with the bending labels ``modes`` and the choice's warnings.
+
+    ``refine(peaks, new_bending) -> peaks`` re-measures peaks that became bending with
+    the full pole-fit effort (they were refined only roughly as non-bending peaks).
+    """
+    peaks = analysis.peaks
+    stat, grown = label_candidates(peaks)
+    old = {i for i, p in enumerate(peaks) if p.kind == "bending"}
+    out = apply_labels(peaks, modes, bands, stationary=stat, grown=grown, source="fit")
+    new = [i for i in modes if i is not None and i not in old]
+    if new and refine is not None:
+        out = refine(out, new)
+    kept = [w for w in analysis.warnings if not w.startswith(("only ", "no bending peak found"))]
+    return replace(analysis, peaks=out, warnings=kept + missing_warnings(modes, len(modes)) + list(warnings))

@@ -1,0 +1,101 @@
+"""Honest prediction bands (identify.bands): composition, tolerances, model-form term, advice."""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from taptune.errors import InputError
+from taptune.identify import predict
+from taptune.identify.bands import DELTA_REF_MM, WIDE_BAND, compose, model_form_term, second_tap_advice
+from taptune.io.assembly import Tolerances, assembly_from_toml, assembly_to_toml
+from taptune.model.params import NOMINAL
+from tests.conftest import REFERENCE_TOML
+
+EXACT = Tolerances(stickout=0.0, diameter=0.0, flute_ratio=0.0)
+SETS = [NOMINAL, replace(NOMINAL, k_tt=NOMINAL.k_tt * 1.3, alpha=-5.0)]
+
+
+def test_tolerance_keys_default_validate_and_round_trip():
+    asm = assembly_from_toml(REFERENCE_TOML)
+    assert asm.tolerances == Tolerances()
+    text = REFERENCE_TOML.replace("stickout = 53.5", "stickout = 53.5\nstickout_tolerance = 0.5")
+    text = text.replace("clamp_length = 40.0", "clamp_length = 40.0\ndiameter_tolerance = 0.2")
+    text = text.replace("flute_diameter = 16.0", "flute_diameter = 16.0\nflute_ratio_tolerance = 0.02")
+    asm = assembly_from_toml(text)
+    assert asm.tolerances == Tolerances(stickout=0.5e-3, diameter=0.002, flute_ratio=0.02)
+    again = assembly_from_toml(assembly_to_toml(asm))
+    assert again.tolerances == asm.tolerances and again == asm
+    assert asm.with_stickout(0.06).tolerances == asm.tolerances
+
+
+@pytest.mark.parametrize("key,value,fragment", [("stickout_tolerance", -0.1, r"\[setup\] stickout_tolerance must lie in \[0, 20\] mm"),
+                                                 ("stickout_tolerance", "'x'", "must be a number")])
+def test_bad_tolerance_names_the_key(key, value, fragment):
+    text = REFERENCE_TOML.replace("stickout = 53.5", f"stickout = 53.5\n{key} = {value}")
+    with pytest.raises(InputError, match=fragment):
+        assembly_from_toml(text, "a.toml")
+
+
+def test_exact_description_without_model_form_is_the_set_spread(reference_assembly):
+    target = reference_assembly.with_stickout(0.0635)
+    p = predict(SETS, target, tolerances=EXACT, model_form=(0.0, 0.0, 0.0))
+    alt = predict(SETS[1:], target, tolerances=EXACT, model_form=(0.0, 0.0, 0.0))
+    spread = np.abs(np.array(alt.bending_hz) - p.bending_hz)
+    assert np.allclose(p.bending_hz_spread, np.maximum(spread, 5e-4 * np.array(p.bending_hz)))
+    assert p.band.geometry_hz == (0.0, 0.0, 0.0) and p.band.half_width_hz == p.bending_hz_spread
+
+
+def test_stickout_part_is_the_frequency_change_over_the_ruler_tolerance(reference_assembly):
+    # Independent route: the predicted frequencies themselves at ± the tolerance.
+    target = reference_assembly.with_stickout(0.0635)
+    tol = Tolerances(stickout=0.4e-3, diameter=0.0, flute_ratio=0.0)
+    p = predict(SETS[:1], target, tolerances=tol, model_form=(0.0, 0.0, 0.0))
+    up, down = (predict(SETS[:1], target.with_stickout(0.0635 + s), tolerances=EXACT, model_form=(0, 0, 0))
+                for s in (0.4e-3, -0.4e-3))
+    expected = np.abs(np.array(up.bending_hz) - down.bending_hz) / 2
+    assert np.allclose(p.band.geometry_parts_hz["stickout"], expected, rtol=1e-6)
+    assert np.all(expected > 0) and np.all(np.diff(up.bending_hz) > 0)
+    # Longer tool, lower frequencies: f1 falls by ~2·f1·δ/L-ish, a few Hz per 0.4 mm here.
+    assert np.all(np.array(up.bending_hz) < down.bending_hz)
+
+
+def test_holder_and_flute_errors_count_only_where_the_transfer_changes_their_effect(reference_assembly):
+    # Predicting the identified assembly itself: the parameters absorbed a wrong diameter
+    # or flute ratio completely, only the stick-outs' ruler errors remain.
+    tol = Tolerances(stickout=0.3e-3, diameter=0.01, flute_ratio=0.05)
+    same = predict(SETS[:1], reference_assembly, identified=[reference_assembly], tolerances=tol, model_form=(0, 0, 0))
+    assert np.allclose(same.band.geometry_parts_hz["diameter"], 0.0)
+    assert np.allclose(same.band.geometry_parts_hz["flute_ratio"], 0.0)
+    assert same.band.delta_stickout_mm == 0.0
+    far = predict(SETS[:1], reference_assembly.with_stickout(0.0735), identified=[reference_assembly],
+                  tolerances=tol, model_form=(0, 0, 0))
+    assert np.all(np.array(far.band.geometry_parts_hz["flute_ratio"]) > 0)
+    assert far.band.delta_stickout_mm == pytest.approx(20.0)
+
+
+def test_model_form_grows_with_the_stickout_change_and_composes_in_quadrature():
+    f = np.array([4000.0, 12000.0, 18000.0])
+    c = (0.002, 0.003, 0.004)
+    assert np.allclose(model_form_term(f, 0.0, c), np.array(c) * f)
+    assert np.allclose(model_form_term(f, DELTA_REF_MM, c), 2 * np.array(c) * f)
+    assert np.allclose(model_form_term(f, None, c), model_form_term(f, 20.0, c))  # unknown: assume 20 mm
+    assert np.allclose(compose([3.0], [4.0], [12.0]), [13.0])
+
+
+def test_band_json_text_and_second_tap_advice(reference_assembly):
+    target = reference_assembly.with_stickout(0.0735)
+    one = predict(SETS, target, identified=[reference_assembly], model_form=(0.008, 0.008, 0.008))
+    d = json.loads(json.dumps(one.to_dict()))
+    assert d["bending_hz_spread"] == d["band"]["half_width_hz"]
+    assert set(d["band"]["components_hz"]) == {"set", "geometry", "model_form"}
+    assert d["band"]["coverage_target"] == 0.9 and d["band"]["recordings"] == 1
+    assert d["band"]["delta_stickout_mm"] == pytest.approx(20.0)
+    assert "90 of 100" in one.band_text()
+    assert np.max(one.band.relative(one.bending_hz)) > WIDE_BAND
+    assert "tap the same holder once more" in second_tap_advice([one])
+    two = predict(SETS, target, identified=[reference_assembly, reference_assembly.with_stickout(0.0635)],
+                  model_form=(0.008, 0.008, 0.008))
+    assert two.band.delta_stickout_mm == pytest.approx(10.0)
+    assert second_tap_advice([two]) is None

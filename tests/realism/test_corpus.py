@@ -1,0 +1,100 @@
+"""The realism corpus: deterministic, disjoint splits, deviations no larger than issue 9 allows."""
+
+import numpy as np
+import pytest
+
+from benchmarks.realism.audio import audible_modes, record
+from benchmarks.realism.corpus import (KINDS, check_pairs, elsewhere, make_case, without, worn)
+from taptune.model.params import HolderParams
+
+MM = 1e-3
+
+
+@pytest.fixture(scope="module")
+def cases():
+    return [make_case("validation", i) for i in range(4)]
+
+
+def test_a_case_is_the_same_every_time(cases):
+    again = make_case("validation", 1)
+    assert again.to_dict() == cases[1].to_dict()
+
+
+def test_splits_draw_different_holders(cases):
+    other = make_case("calibration", 1)
+    assert other.holder.params != cases[1].holder.params
+    assert other.name != cases[1].name
+
+
+def test_deviations_stay_within_the_issue_limits(cases):
+    for c in cases:
+        assert set(c.kinds) <= set(KINDS)
+        tool = c.described.tool
+        assert tool.flute_ratio == 0.8  # what a user's file says
+        assert abs(c.true_assembly.stickout - c.described.stickout) <= 0.4 * MM + 1e-12
+        for q in c.queries:
+            assert abs(q.true_stickout_mm - q.stickout_mm) <= 0.4 + 1e-9
+        assert all(abs(f - 1) <= 0.015 for f in c.true_od_factors)
+        assert 0.72 <= c.true_flute_ratio <= 0.86
+        assert 0 <= c.holder.asymmetry <= 0.015
+        p = c.holder.params
+        # Published ranges of MODEL.md §8.1 (five real holders).
+        assert 1.8e9 <= p.k_tt <= 4.7e9 and 2.95e3 <= p.k_rr <= 4.83e4
+        assert -23 <= p.alpha <= 11
+        assert 7428 / 7800 <= p.density_factor <= 8045 / 7800
+        assert 200 / 210 <= p.modulus_factor <= 213 / 210
+        # A real stick-out: the tool is gripped and the flutes are outside.
+        assert c.described.inserted_length > 0.3 * c.described.holder.clamp_length
+        assert len(c.queries) == 2
+
+
+def test_in_family_control_has_no_deviation():
+    c = make_case("infamily", 0)
+    assert c.kinds == ()
+    assert c.true_assembly.stickout == pytest.approx(c.described.stickout)
+    assert c.holder.profile.kind == "linear" and c.holder.asymmetry == 0 and c.holder.extra_mass.mass == 0
+    assert [s.od for s in c.true_assembly.holder.segments] == [s.od for s in c.described.holder.segments]
+    assert c.true_assembly.tool.segments == c.described.tool.segments
+
+
+def test_worn_and_elsewhere_keep_the_holder(cases):
+    ref = cases[0]
+    w = worn(ref, 0.5)
+    assert w.holder.params.k_tt == pytest.approx(0.5 * ref.holder.params.k_tt)
+    assert w.described.holder == ref.described.holder
+    assert w.truth.bending_hz[0] < ref.truth.bending_hz[0]
+    moved = elsewhere(ref, ref.queries[0].stickout_mm)
+    assert moved.holder == ref.holder
+    assert moved.described.stickout == pytest.approx(ref.queries[0].stickout_mm * MM)
+    assert moved.truth.bending_hz[0] == pytest.approx(ref.queries[0].truth.bending_hz[0], rel=0.02)
+
+
+def test_without_removes_one_deviation(cases):
+    c = next(c for c in cases if "diameters" in c.kinds)
+    plain = without(c, "diameters")
+    assert "diameters" not in plain.kinds
+    assert [s.od for s in plain.true_assembly.holder.segments] == [s.od for s in c.described.holder.segments]
+    assert plain.holder == c.holder
+
+
+def test_recording_is_deterministic_and_its_first_mode_audible(cases):
+    from taptune.signal.analysis import analyse_recording
+
+    c = cases[3]
+    a, b = record(c), record(c)
+    np.testing.assert_array_equal(a.samples, b.samples)
+    assert a.sample_rate == c.recording.nuisances.sample_rate
+    # Quantised to the file's bit depth.
+    full = 2 ** (c.recording.bits - 1) - 1
+    assert np.allclose(a.samples * full, np.round(a.samples * full))
+    analysis = analyse_recording(a)
+    heard = audible_modes(c, analysis)
+    assert heard[0]
+
+
+def test_check_pairs_expect_consistent_then_differs():
+    pairs = check_pairs(1)
+    assert [p[2] for p in pairs] == ["consistent", "differs", "differs"]
+    ref = pairs[0][0]
+    assert all(p[0] is ref for p in pairs)
+    assert isinstance(ref.holder.params, HolderParams)
