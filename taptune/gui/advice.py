@@ -15,18 +15,18 @@ from PySide6.QtWidgets import QFrame, QHBoxLayout, QLabel, QPushButton
 from taptune.gui.signals import emit
 
 MM = 1e-3
-# A predicted band wider than ±1 % of the frequency is "wide": more than the 0.05 % the
-# peaks are measured to and more than a holder-to-holder difference worth acting on.
-WIDE_RELATIVE = 0.01
 # How far from the recorded stick-out the bands are looked at (and the second tap advised) [mm].
 STEP_MM = 10.0
 
 
 def widest_band(result, assembly, model_options=None, step_mm: float = STEP_MM):
-    """The widest relative half-width of f1–f3 predicted ``step_mm`` either side of the recorded stick-out.
+    """Where the near-optimal fits of one recording part ways most, ``step_mm`` either side of its stick-out.
 
-    Returns ``(relative half-width, mode number 1–3, stick-out [mm])`` or None where no
-    neighbouring stick-out fits the tool and holder.
+    The bands are :func:`~taptune.identify.predict`'s honest ones for a holder identified
+    on ``assembly`` alone. Only their near-optimal-fits part (``band.set_hz``) is what a
+    second recording narrows; the geometry tolerances at the new stick-out stay.
+    Returns ``(fits part, whole band, mode 1–3, stick-out [mm])`` with the parts relative
+    to the frequency, or None where no neighbouring stick-out fits the tool and holder.
     """
     from taptune.errors import InputError
     from taptune.gui.stickout import stickout_range_mm
@@ -40,24 +40,31 @@ def widest_band(result, assembly, model_options=None, step_mm: float = STEP_MM):
             continue
         try:
             p = predict(result.param_sets, assembly.with_stickout(stickout_mm * MM), model_options,
-                        relative_floor=result.relative_floor)
+                        relative_floor=result.relative_floor, identified=[assembly])
         except InputError:
             continue
-        for mode, (f, spread) in enumerate(zip(p.bending_hz, p.bending_hz_spread), start=1):
-            if widest is None or spread / f > widest[0]:
-                widest = (spread / f, mode, stickout_mm)
+        for mode, (f, fits, whole) in enumerate(zip(p.bending_hz, p.band.set_hz, p.band.half_width_hz), start=1):
+            if widest is None or fits / f > widest[0]:
+                widest = (fits / f, whole / f, mode, stickout_mm)
     return widest
 
 
 def second_tap_advice(result, assembly, model_options=None) -> str | None:
-    """A sentence asking for a second tap when one recording leaves a band wider than ±1 %, else None."""
+    """A sentence asking for a second tap when one recording leaves the fits wide apart, else None.
+
+    "Wide" is :data:`taptune.identify.bands.WIDE_BAND` (±1 %, the rule of ``taptune
+    predict``), applied to the part of the band a second recording narrows.
+    """
+    from taptune.identify.bands import WIDE_BAND
+
     widest = widest_band(result, assembly, model_options)
-    if widest is None or widest[0] <= WIDE_RELATIVE:
+    if widest is None or widest[0] <= WIDE_BAND:
         return None
-    relative, mode, stickout_mm = widest
-    return (f"One recording leaves the prediction loose: f{mode} at {stickout_mm:g} mm is only known to "
-            f"±{100 * relative:.1f} %. Tap the same holder and tool again at about {stickout_mm:g} mm, add it "
-            "as the 2nd stick-out and identify both together.")
+    fits, whole, mode, stickout_mm = widest
+    return (f"One recording leaves the prediction loose: at {stickout_mm:g} mm the fits that explain this tap "
+            f"equally well differ by ±{100 * fits:.1f} % on f{mode} (the whole band ±{100 * whole:.1f} %). "
+            f"Tap the same holder and tool again at about {stickout_mm:g} mm, add it as the 2nd stick-out and "
+            "identify both together.")
 
 
 class Banner(QFrame):

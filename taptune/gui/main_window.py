@@ -9,6 +9,7 @@ recording, the assembly and the library as they were.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -447,8 +448,6 @@ class MainWindow(QMainWindow):
 
     def relabel_second_peak(self, index: int, kind: str, mode) -> None:
         """Give peak ``index`` of the 2nd recording a new label."""
-        import dataclasses
-
         if self.second is None or self._identify_task is not None:
             return
         self.second = dataclasses.replace(self.second, analysis=relabel(self.second.analysis, index, kind, mode))
@@ -607,7 +606,7 @@ class MainWindow(QMainWindow):
             self.banner.show_text(advice)
         self.set_holder_source(PredictorSource(f"identified now ({assembly.holder.name})",
                                                tuple(result.param_sets), assembly, self.identify_options.model,
-                                               result.relative_floor))
+                                               result.relative_floor, tuple(assemblies)))
         self.show_view("fit")
         self.statusBar().showMessage(
             f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
@@ -714,7 +713,7 @@ class MainWindow(QMainWindow):
             return
         sets = tuple(entry.prediction_sets())
         self.set_holder_source(PredictorSource(f"library ({entry.name})", sets, assembly, options,
-                                               entry.relative_floor()))
+                                               entry.relative_floor(), tuple(entry.identified_assemblies())))
         if self.tabs.currentWidget() is not self.machine:
             self.show_view("predict")
 
@@ -740,8 +739,7 @@ class MainWindow(QMainWindow):
         except InputError as err:
             self.statusBar().showMessage(f"Prediction keeps the previous tool: {err}", 10000)
             return
-        self.set_holder_source(PredictorSource(source.label, source.param_sets, moved, source.model_options,
-                                               source.relative_floor))
+        self.set_holder_source(dataclasses.replace(source, assembly=moved))
 
     # ------------------------------------------------------------------ drag and drop, closing
 

@@ -162,5 +162,16 @@ def test_library_holder_predicts_with_the_panel_tool(qtbot, window, library_path
     with qtbot.waitSignal(window.predictor.predicted, timeout=20000) as blocker:
         window.library_view.buttons["predict"].click()
     # MODEL.md §13.4: holder A at 53.5 mm, f1 = 4685.8 Hz.
-    assert blocker.args[0].bending_hz[0] == pytest.approx(4685.8, rel=5e-4)
+    prediction = blocker.args[0]
+    assert prediction.bending_hz[0] == pytest.approx(4685.8, rel=5e-4)
     assert window.tabs.currentWidget() is window.predictor
+    # How each ± was made: the components per mode, combined in quadrature, and the calibration.
+    band = prediction.band
+    view = window.predictor
+    assert not view.band_table.isHidden()
+    assert view.band_table.item(0, 1).text() == f"{band.half_width_hz[0]:,.0f} Hz"
+    assert view.table.item(0, 1).text().endswith(f"± {band.half_width_hz[0]:,.0f}")
+    assert band.half_width_hz[0] == pytest.approx(np.sqrt(band.set_hz[0] ** 2 + band.geometry_hz[0] ** 2
+                                                          + band.model_form_hz[0] ** 2), rel=1e-9)
+    assert view.band_table.item(0, 3).text() == f"{band.geometry_hz[0]:,.0f}"
+    assert f"Calibration: {band.calibration}" in view.band_note.text()
