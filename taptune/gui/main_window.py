@@ -176,9 +176,9 @@ class MainWindow(QMainWindow):
         record_tab = QWidget()
         rl = QVBoxLayout(record_tab)
         rl.addWidget(self.recorder)
-        open_box = QLabel("…or open a recording made earlier: <b>Open recording…</b> above, "
-                          "or drop a WAV/FLAC file onto the window. An assembly file with the "
-                          "same name beside it is loaded too.")
+        open_box = QLabel("…or open a recording made earlier: <b>Open recording…</b> above, or drop an audio "
+                          "file (WAV, FLAC, MP3, a phone's M4A or video…) onto the window. An assembly file with "
+                          "the same name beside it is loaded too.")
         open_box.setWordWrap(True)
         open_box.setMaximumWidth(760)
         rl.addWidget(open_box)
