@@ -87,6 +87,15 @@ def fast_identify_options():
                            polish_evaluations=60)
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _own_settings(tmp_path_factory):
+    """Every QSettings() of the tests lives in a temporary folder: the user's remembered
+    machine file is neither read nor overwritten."""
+    from PySide6.QtCore import QSettings
+
+    QSettings.setPath(QSettings.IniFormat, QSettings.UserScope, str(tmp_path_factory.mktemp("settings")))
+
+
 @pytest.fixture(autouse=True)
 def _clear_messages():
     from taptune.gui import messages

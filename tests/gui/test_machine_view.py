@@ -118,3 +118,15 @@ def test_teeth_from_tool_names():
     assert tool_teeth("3-flute roughing") == 3
     assert tool_teeth("HSS Z2 slot drill") == 2
     assert tool_teeth("end mill D16") is None
+
+
+def test_screenshot_of_the_machine_view(holder_a, library_path, tmp_path, reference_toml):
+    from PySide6.QtGui import QImage
+
+    from taptune.cli import main
+
+    png = tmp_path / "machine.png"
+    assert main(["gui", "--assembly", str(reference_toml), "--holder", holder_a.name, "--library", str(library_path),
+                 "--machine", str(MACHINE), "--view", "machine", "--screenshot", str(png)]) == 0
+    image = QImage(str(png))
+    assert (image.width(), image.height()) == (1366, 768)
