@@ -135,6 +135,7 @@ def run(args) -> int:
     rpm = rpm_grid(args, freq, gxx, gyy, args.teeth, max_rpm)
     lobes = stability_lobes(freq, gxx, gyy, teeth=args.teeth, ktc=ktc, krc=krc, diameter=diameter * 1e-3,
                             ae=args.ae * 1e-3, milling=args.milling, rpm=rpm)
+    warnings += [w for w in lobes.warnings if w not in warnings]
     out = lobes.to_dict()
     cut = {"teeth": args.teeth, "ktc_mpa": ktc / 1e6, "krc_mpa": krc / 1e6, "diameter_mm": diameter,
            "ae_mm": args.ae, "milling": args.milling, "material": args.material}

@@ -2,8 +2,8 @@
 
 Inverse receptance coupling (MODEL.md §10.3, MACHINE.md): the spindle's 2×2 receptance
 at the coupling plane in one bending direction, from three hammer-test FRFs on a simple
-dummy holder in the spindle. Ill-conditioned by nature: the FRFs are smoothed when they
-are noisy, and the bands where the result cannot be trusted are reported and shaded.
+dummy holder in the spindle. Ill-conditioned by nature: noisy FRFs are replaced by a
+rational fit first, and the bands where the result cannot be trusted are reported and shaded.
 """
 
 from __future__ import annotations
@@ -23,9 +23,10 @@ def add_parser(sub, name, help_text):
     p.add_argument("--points", type=float, nargs=2, required=True, metavar=("A_MM", "B_MM"),
                    help="points a and b as distances from the dummy's front face [mm] (a = 0: its free end)")
     p.add_argument("--out", required=True, metavar="SPINDLE_CSV", help="the spindle receptance file to write (.csv)")
-    p.add_argument("--smooth", default="auto", metavar="N|auto",
-                   help="half-width in grid points of the smoothing before the solve; 0 for none; "
-                        "auto (default) smooths only noisy FRFs")
+    p.add_argument("--smooth", default="auto", metavar="auto|fit|N",
+                   help="what to do with the FRFs before the solve: fit = replace them by a rational fit "
+                        "(common poles), N = local quadratic smoothing over 2N+1 points, 0 = nothing; "
+                        "auto (default) fits only noisy FRFs")
     p.add_argument("--json", metavar="OUT", help="write a summary (trusted bands, warnings) as JSON ('-' for stdout)")
     p.add_argument("--plot", metavar="PNG", help="write a picture of the three receptance terms")
     return p
@@ -53,14 +54,14 @@ def read_measurements(args):
 def smoothing(value: str):
     from taptune.errors import InputError
 
-    if value == "auto":
-        return "auto"
+    if value in ("auto", "fit"):
+        return value
     try:
         n = int(value)
     except ValueError:
         n = -1
     if n < 0:
-        raise InputError(f"--smooth must be 'auto' or a whole number >= 0, got {value!r}")
+        raise InputError(f"--smooth must be 'auto', 'fit' or a whole number >= 0, got {value!r}")
     return n
 
 

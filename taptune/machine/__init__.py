@@ -4,19 +4,24 @@ MODEL.md §10 (receptance coupling, inverse RCSA) and §11 (zero-order lobes); f
 commands in MACHINE.md. This layer uses io, model and identify; nothing below imports it.
 Names are imported on first use, so ``import taptune.machine`` stays light.
 
-Public API (signatures in each module's docstring)::
+Public API (signatures in each module's docstring; SI inside: m, Hz, N/m², m/N)::
 
     coupling_plane(holder, source="") -> float                        # plane.py, z_cp [m]
-    cut_assembly(assembly) -> Assembly;  cut_holder(holder) -> Holder
-    receptance_blocks(fe, params, freq_hz, method="modal") -> ReceptanceBlocks   # blocks.py
-    couple(h11, h12, h21, h22, h_s, joint=None) -> G11                # coupling.py
+    cut_assembly(assembly) -> Assembly;  cut_holder(holder, source="") -> Holder
+    receptance_blocks(fe, params, freq_hz, method="modal"|"direct") -> ReceptanceBlocks
+        # blocks.py: .h11 (tip), .h12, .h21, .h22 (coupling node), each (n, 2, 2)
+    couple(h11, h12, h21, h22, h_s, joint=None) -> G11 (n, 2, 2)     # coupling.py
     toolpoint_frf(assembly, params, spindle, freq_hz, model_options=None, joint=None,
-                  contact="distributed", method="modal", lumped=None) -> ToolpointFRF
-    spindle_from_dummy(dummy, point_a_m, point_b_m, freq_hz, g_aa, g_ab, g_bb, ...)
-        -> (SpindleReceptance, warnings)                              # dummy.py
-    stability_lobes(freq_hz, phi_xx, phi_yy, *, teeth, ktc, krc, diameter, ae, milling, rpm)
-        -> Lobes                                                      # lobes.py
-    MATERIALS: dict of name -> CuttingCoefficients                    # materials.py
+                  contact="distributed"|"rigid"|"lumped", method="modal", lumped=None) -> ToolpointFRF
+        # spindle = {"x": SpindleReceptance, "y": SpindleReceptance | None}
+    spindle_from_dummy(dummy, point_a_m, point_b_m, freq_hz, g_aa, g_ab, g_bb, *, model_options=None,
+                       smooth="auto", source="dummy", return_fit=False)
+        -> (SpindleReceptance, warnings[, DummyFit])                   # dummy.py
+    stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth, ktc, krc, diameter, ae,
+                    milling="up"|"down", rpm, refine=8) -> Lobes       # lobes.py
+    MATERIALS: dict[str, CuttingCoefficients]; cutting_coefficients(name)   # materials.py
+    dominant_modes(freq_hz, frf, direction) -> list[FRFMode]          # peaks.py
+    fit_frfs(freq_hz, frfs) -> RationalFit                            # vectfit.py
 """
 
 from __future__ import annotations
@@ -46,6 +51,9 @@ _EXPORTS = {
     "Lobes": "lobes",
     "MATERIALS": "materials",
     "CuttingCoefficients": "materials",
+    "cutting_coefficients": "materials",
+    "fit_frfs": "vectfit",
+    "RationalFit": "vectfit",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from taptune.errors import InputError
 from taptune.model.fe import FEModel
 from taptune.model.modes import TWO_PI, BandedLU, _elastic, rigid_body_modes
 from taptune.model.params import HolderParams
@@ -72,7 +73,8 @@ class ReceptanceBlocks:
 def _omega2(freq_hz) -> np.ndarray:
     f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
     if f.size == 0 or np.any(~np.isfinite(f)) or np.any(f <= 0):
-        raise ValueError("receptances of a free-free model need finite frequencies > 0 Hz")
+        raise InputError("the frequency grid must hold finite frequencies > 0 Hz (a free-free receptance is "
+                         "undefined at 0 Hz)")
     return (TWO_PI * f) ** 2
 
 

@@ -33,7 +33,7 @@ from taptune.io.assembly import Assembly
 from taptune.io.machine import SpindleReceptance
 from taptune.machine.blocks import receptance_blocks
 from taptune.machine.lumped import LumpedJoint, lumped_contact_model
-from taptune.machine.peaks import FRFMode, dominant_modes
+from taptune.machine.peaks import dominant_modes
 from taptune.machine.plane import coupling_plane, cut_assembly
 from taptune.model.fe import FEModel, build_model, rigid_contact_model
 from taptune.model.options import ModelOptions
@@ -127,6 +127,8 @@ def _spindle_pair(spindle) -> tuple[SpindleReceptance, SpindleReceptance]:
     if not isinstance(x, SpindleReceptance):
         raise InputError("machine: the spindle needs an x-direction receptance")
     y = spindle.get("y") or x
+    if not isinstance(y, SpindleReceptance):
+        raise InputError("machine: the y-direction spindle must be a receptance (or absent: y = x)")
     return x, y
 
 

@@ -11,9 +11,10 @@ gives two eigenvalues Λ (both roots are kept), and each gives
     ψ = arctan κ,  ε = π − 2ψ,  n_k = 60 ω_c / (N (ε + 2kπ))  [rpm],  k = 0, 1, 2, …
 
 The stability boundary is the lower envelope of all (n_k, a_lim) curves on the
-requested speed grid: every lobe is split into pieces monotonic in n and each piece is
-interpolated onto the grid; the chatter frequency of the piece that sets the boundary
-is kept per speed. Lobes are followed down to the lowest requested speed.
+requested speed grid: every lobe is cut into segments between consecutive scan points
+(monotonic pieces) and each is interpolated linearly onto the grid speeds it spans; the
+chatter frequency of the segment that sets the boundary is kept per speed. Lobes are
+followed down to the lowest requested speed.
 
 Chatter-frequency scan: every frequency of the FRF grid, plus ``refine`` extra points
 per grid interval (cubic interpolation of the FRF in re and im) within ``REFINE_BANDS``
@@ -96,7 +97,10 @@ class Lobes:
     pockets : tuple of (rpm, a_lim [m])
         Local maxima of the boundary inside the grid (lobe peaks), best first.
     curves : tuple of (k, rpm ndarray, a_lim ndarray)
-        The monotonic pieces of every lobe (for plots), each ascending in rpm.
+        Every lobe k (both roots) that reaches the grid, in chatter-frequency order over
+        the scan (NaN/inf where a root gives no positive limit), for plots.
+    warnings : tuple of str
+        E.g. speeds that no lobe reaches because the FRF's band ends too early.
     """
 
     rpm: np.ndarray = field(repr=False)
@@ -105,6 +109,7 @@ class Lobes:
     a_crit: float = float("nan")
     pockets: tuple = ()
     curves: tuple = field(default=(), repr=False)
+    warnings: tuple = ()
 
     def to_dict(self) -> dict:
         """MACHINE.md's ``lobes`` JSON (mm, rpm, Hz); non-finite values are null."""
@@ -161,32 +166,54 @@ def _eigenvalues(phi_xx, phi_yy, a) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         lam1 = np.where(a0 != 0, q / a0, np.inf)
         lam2 = np.where(q != 0, 1.0 / q, np.inf)
-    return np.stack([lam1, lam2])
+    return _follow(np.stack([lam1, lam2]))
 
 
-def _pieces(n, a, fc):
-    """Split one lobe (n, a_lim, f_c over the scan) into pieces monotonic in n, ascending."""
-    ok = np.isfinite(a) & (a > 0) & np.isfinite(n)
-    out = []
-    # Runs of valid points, then runs of one sign of dn inside each.
-    idx = np.flatnonzero(ok)
-    if idx.size < 2:
-        return out
-    breaks = np.flatnonzero(np.diff(idx) > 1) + 1
-    for run in np.split(idx, breaks):
-        if run.size < 2:
-            continue
-        d = np.sign(np.diff(n[run]))
-        turns = np.flatnonzero(d[1:] != d[:-1]) + 1
-        start = 0
-        for stop in list(turns) + [len(d)]:
-            sel = run[start: stop + 1]
-            start = stop
-            if sel.size < 2:
-                continue
-            order = np.argsort(n[sel], kind="stable")
-            out.append((n[sel][order], a[sel][order], fc[sel][order]))
-    return out
+def _follow(lam) -> np.ndarray:
+    """Label the two roots continuously along the scan, shape (2, n).
+
+    The sign choice above swaps the roots wherever Re(ā1·√disc) changes sign; a lobe
+    joining one root at one frequency to the other at the next would draw a false
+    segment across the speed axis. Each point keeps the pairing nearest (in 1/Λ, which
+    stays finite) to the previous point; the swaps accumulate as a parity.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(np.isfinite(lam), 1.0 / lam, 0.0)
+    same = np.abs(inv[0, 1:] - inv[0, :-1]) + np.abs(inv[1, 1:] - inv[1, :-1])
+    cross = np.abs(inv[0, 1:] - inv[1, :-1]) + np.abs(inv[1, 1:] - inv[0, :-1])
+    flip = np.concatenate([[False], np.cumsum(cross < same) % 2 == 1])
+    return np.where(flip[None, :], lam[::-1], lam)
+
+
+def _lower_envelope(grid, n, a, fc, best, chatter) -> bool:
+    """Lower ``best`` (and set ``chatter``) on the ascending speed grid with one lobe curve.
+
+    The curve (n, a, f_c) over the scan is cut into segments between consecutive valid
+    scan points; each segment is interpolated linearly onto the grid speeds it spans
+    (its monotonic piece). Returns whether the curve reached the grid.
+    """
+    ok = np.isfinite(a) & np.isfinite(n)
+    seg = np.flatnonzero(ok[:-1] & ok[1:])
+    if seg.size == 0:
+        return False
+    n0, n1 = n[seg], n[seg + 1]
+    lo = np.searchsorted(grid, np.minimum(n0, n1), "left")
+    hi = np.searchsorted(grid, np.maximum(n0, n1), "right")
+    count = hi - lo
+    if count.sum() == 0:
+        return bool(np.any((n[ok] >= grid[0]) & (n[ok] <= grid[-1])))
+    which = np.repeat(np.arange(seg.size), count)
+    # Grid index of every (segment, speed) pair: lo of its segment plus its rank inside.
+    start = np.cumsum(count) - count
+    g = lo[which] + np.arange(which.size) - start[which]
+    s0 = seg[which]
+    dn = n[s0 + 1] - n[s0]
+    t = np.where(dn != 0, (grid[g] - n[s0]) / np.where(dn != 0, dn, 1.0), 0.0)
+    val = a[s0] + t * (a[s0 + 1] - a[s0])
+    np.minimum.at(best, g, val)
+    win = val <= best[g]
+    chatter[g[win]] = (fc[s0] + t * (fc[s0 + 1] - fc[s0]))[win]
+    return True
 
 
 def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,
@@ -251,24 +278,21 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
     curves = []
     for k in range(k_max + 1):
         n_k = 60 * omega[None, :] / (teeth * (eps + 2 * k * np.pi))
-        if np.all(~(n_k >= n_lo) | ~np.isfinite(a_lim)):
-            continue
         for r in range(2):
-            for n, al, fc in _pieces(n_k[r], a_lim[r], np.broadcast_to(fs, n_k[r].shape)):
-                if n[-1] < grid[0] or n[0] > grid[-1]:
-                    continue
-                curves.append((k, n, al))
-                inside = (grid >= n[0]) & (grid <= n[-1])
-                val = np.interp(grid[inside], n, al)
-                sel = np.flatnonzero(inside)[val < best[inside]]
-                if sel.size:
-                    best[sel] = np.interp(grid[sel], n, al)
-                    chatter[sel] = np.interp(grid[sel], n, fc)
+            if _lower_envelope(grid, n_k[r], a_lim[r], fs, best, chatter):
+                curves.append((k, np.where(np.isfinite(a_lim[r]), n_k[r], np.nan), a_lim[r]))
     out_a = np.empty_like(best)
     out_c = np.empty_like(chatter)
     out_a[order], out_c[order] = best, chatter
+    warnings = []
+    gap = ~np.isfinite(best)
+    if gap.any():
+        warnings.append(
+            f"no lobe reaches {gap.sum()} of {len(grid)} speeds ({grid[gap].min():g}–{grid[gap].max():g} rpm): "
+            f"their chatter frequencies lie outside the FRF's band ({f[0]:g}–{f[-1]:g} Hz); the limit there is unknown"
+        )
     return Lobes(rpm=speeds, a_lim=out_a, chatter_hz=out_c, a_crit=a_crit, pockets=_pockets(grid, best),
-                 curves=tuple(curves))
+                 curves=tuple(curves), warnings=tuple(warnings))
 
 
 def _pockets(grid, a) -> tuple:

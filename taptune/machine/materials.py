@@ -4,7 +4,8 @@ K_tc and K_rc are the tangential and radial shearing-force coefficients of the l
 (mechanistic) milling force model, F_t = K_tc a h + K_te a, F_r = K_rc a h + K_re a; the
 zero-order lobes use K_tc and K_rc only. They depend on the tool (rake, helix, edge)
 and the feed range they were identified for, so treat them as starting values and
-prefer coefficients measured with your own tool.
+prefer coefficients measured with your own tool. Only values whose source could be
+checked are listed; add others with their source.
 
 Signature::
 
@@ -41,11 +42,6 @@ MATERIALS = {
             "al6082", 902 * MPA, 243 * MPA,
             "aluminium EN AW-6082, 12 mm 4-flute carbide end mill, 0.05 mm/tooth: the published cutting "
             "data of the core method's validation (MODEL.md §11)",
-        ),
-        CuttingCoefficients(
-            "al7075", 796 * MPA, 0.212 * 796 * MPA,
-            "aluminium 7075-T6: K_t = 796 N/mm², K_r = 0.212 (Altintas & Budak, Analytical prediction of "
-            "stability lobes in milling, CIRP Annals 44(1), 1995)",
         ),
     )
 }

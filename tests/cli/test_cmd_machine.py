@@ -287,7 +287,7 @@ def test_spindle_recovers_the_bundled_spindle_from_dummy_tests(tmp_path, capsys)
     out = tmp_path / "spindle_x.csv"
     code, text, err = taptune(capsys, "spindle", "--dummy", tmp_path / "dummy.toml", "--aa", paths["aa"], "--ab", paths["ab"],
                               "--bb", paths["bb"], "--points", 0, 70, "--out", out, "--json", tmp_path / "s.json",
-                              "--plot", tmp_path / "s.png")
+                              "--plot", tmp_path / "s.png", "--smooth", 0)  # noise-free: the identity, no fit
     assert code == 0, err
     assert "trusted at" in text
     got = read_spindle(out)
@@ -350,3 +350,27 @@ def test_toolpoint_contact_models_differ_as_physics_says(tmp_path, capsys):
         tops[contact] = pred["frequency_hz"][int(np.argmax(np.abs(g)))]
     assert tops["rigid"] > tops["distributed"]
     assert tops["lumped"] != tops["distributed"]
+
+
+def test_holder_from_the_library_is_read_only_and_equals_its_params(tmp_path, capsys):
+    """--holder takes the library entry's parameters (here the example's true ones): the same FRF as
+    --params with that file, and the library file is not touched."""
+    from taptune.cli.cmd_model import read_params_file
+    from taptune.library import HolderLibrary
+    from taptune.library.schema import HolderEntry
+    from tests.library.entries import REFERENCE
+
+    params = read_params_file(RECORDINGS / "er32_d16.params.json")
+    entry = HolderEntry.create(REFERENCE.holder, params, param_sets=(params,))
+    library = tmp_path / "lib.json"
+    HolderLibrary(library).put(entry)
+    before = library.read_bytes()
+    grid = ["--freq", 1000, 6000, 10]
+    code, _, err = taptune(capsys, "toolpoint", RECORDINGS / "er32_d16.toml", "--holder", entry.name, "--library", library,
+                           "--machine", RECORDINGS / "machine" / "machine.toml", *grid, "--json", tmp_path / "lib.json.out")
+    assert code == 0, err
+    code, _, err = taptune(capsys, "toolpoint", *DEMO, *grid, "--json", tmp_path / "params.json.out")
+    assert code == 0, err
+    a, b = (json.loads((tmp_path / n).read_text())["predictions"][0] for n in ("lib.json.out", "params.json.out"))
+    np.testing.assert_allclose(complex_of(a["x"]), complex_of(b["x"]), rtol=1e-9)
+    assert library.read_bytes() == before

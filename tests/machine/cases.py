@@ -48,3 +48,12 @@ def truth(name: str) -> dict:
 
 def complex_of(d: dict) -> np.ndarray:
     return np.asarray(d["re"]) + 1j * np.asarray(d["im"])
+
+
+def lumped_spindle(freq_hz):
+    """A machine side with inertia and lossy, coupled springs: H_S = (K_s − ω² M_s)⁻¹, (n, 2, 2)."""
+    k = np.array([[2.0e8, -4.0e6], [-4.0e6, 3.0e5]]) * (1 + 0.04j)
+    m, e, j = 6.0, -0.03, 4.0e-3
+    mass = np.array([[m, m * e], [m * e, j + m * e * e]])
+    z = k[None] - (2 * np.pi * np.asarray(freq_hz))[:, None, None] ** 2 * mass[None]
+    return np.linalg.inv(z)
