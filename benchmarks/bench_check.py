@@ -73,7 +73,8 @@ def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
 
 
 def rejudge(row: dict, scale: float = 1.0, floor: float = 0.0) -> str:
-    """The verdict of a saved row with every band × ``scale`` and at least ``floor`` × f."""
+    """The verdict of a saved row with every prediction band × ``scale`` and at least ``floor`` × f
+    (the stick-out term, if the row has one, is added unchanged)."""
     from types import SimpleNamespace
 
     from taptune.identify import Prediction
@@ -82,10 +83,11 @@ def rejudge(row: dict, scale: float = 1.0, floor: float = 0.0) -> str:
     modes = row["modes"]
     peaks = [SimpleNamespace(hz=m["measured_hz"], mode=m["mode"], kind="bending", scatter_hz=m["sigma_hz"])
              for m in modes if m["status"] not in ("not measured", "hidden")]
-    bands = tuple(max(scale * m["band_hz"], floor * m["predicted_hz"]) for m in modes)
+    setup = [m.get("setup_hz") or 0.0 for m in modes]  # band_hz = prediction band + setup
+    bands = tuple(max(scale * (m["band_hz"] - s), floor * m["predicted_hz"]) for m, s in zip(modes, setup))
     prediction = Prediction(row["stickout_mm"], tuple(m["predicted_hz"] for m in modes), bands, (0.0,) * 3, (0.0,) * 3)
     analysis = SimpleNamespace(bending_peaks=peaks, bandwidth_hz=None)
-    return check_tap(analysis, prediction, worn_hz=row["worn_hz"]).verdict
+    return check_tap(analysis, prediction, worn_hz=row["worn_hz"], setup_hz=setup).verdict
 
 
 def confusion(rows: list[dict]) -> dict:

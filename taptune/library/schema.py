@@ -459,8 +459,9 @@ class CheckRecord:
     """One check of the holder by a single tap (``taptune check``), kept in its history.
 
     ``modes`` holds per bending mode ``{"mode", "measured_hz" (null if not measured),
-    "predicted_hz", "band_hz"}`` [Hz]; ``verdict`` is ``consistent``, ``differs`` or
-    ``inconclusive`` (taptune.identify.check).
+    "predicted_hz", "band_hz"}`` [Hz], ``band_hz`` the half-width the verdict used (the
+    prediction's band plus the stick-out term); ``verdict`` is ``consistent``, ``differs``
+    or ``inconclusive`` (taptune.identify.check).
     """
 
     date: str
