@@ -12,6 +12,8 @@ constants in bands.py: transfer error, coverage and half-width, and the labels
 Run (minutes; identifications are cached in --cache):
 ``python benchmarks/calibrate_bands.py --split calibration --n 24``  (prints c_mode)
 ``python benchmarks/calibrate_bands.py --split validation --n 24``   (measures)
+``python benchmarks/calibrate_bands.py --records benchmarks/realism/baseline_calibration.json``
+(the identifications stored by ``python -m benchmarks.realism.run``)
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+
+import numpy as np  # noqa: E402
 
 from taptune.identify import bands, predict  # noqa: E402
 
@@ -83,6 +87,21 @@ def conformal(rows_, level: float = bands.COVERAGE) -> list[float]:
     return out
 
 
+def stats(rows_, coefficients) -> str:
+    """Transfer error, coverage and half-width of the band with model-form ``coefficients``."""
+    err, half, inside = [], [], {1: [], 2: [], 3: []}
+    for r in rows_:
+        model = coefficients[r["mode"] - 1] * r["f"] * (1 + r["delta"] / bands.DELTA_REF_MM)
+        h = float(bands.compose(r["set"], r["geom"], model))
+        err.append(r["err"] / r["f"])
+        half.append(h / r["f"])
+        inside[r["mode"]].append(r["err"] <= h)
+    cover = np.mean([v for m in inside.values() for v in m])
+    return (f"{len(rows_)} predictions: |error| median {100 * np.median(err):.3f} %, max {100 * np.max(err):.3f} %; "
+            f"coverage {cover:.1%} (modes {', '.join(f'{np.mean(v):.0%}' for v in inside.values())}); "
+            f"half-width median {100 * np.median(half):.3f} % (p90 {100 * np.quantile(half, 0.9):.3f} %)")
+
+
 def main() -> None:
     from benchmarks.realism.run import print_summary, reevaluate, summarise
 
@@ -90,19 +109,29 @@ def main() -> None:
     ap.add_argument("--split", default="calibration")
     ap.add_argument("--n", type=int, default=24)
     ap.add_argument("--cache", default=str(REPO / ".calibrate_cache"))
+    ap.add_argument("--records", help="a benchmarks.realism.run results JSON to use instead of identifying")
+    ap.add_argument("--rows", help="per-prediction components (set, geometry, error): read if present, else written")
     args = ap.parse_args()
-    cache = Path(args.cache)
-    cache.mkdir(exist_ok=True)
-    recs = records(args.split, args.n, cache)
-    print_summary(summarise(recs), f"{args.split}: as identified (run.py's own predictions)")
-    rows_ = []
-    base = reevaluate(recs, band_method((0.0, 0.0, 0.0), rows_))
-    print_summary(summarise(base), f"{args.split}: set + geometry only")
-    if args.split == "calibration":
-        c = conformal(rows_)
-        print("model-form coefficients c_mode (split-conformal, 90 %):", [round(x, 6) for x in c])
-        print_summary(summarise(reevaluate(recs, band_method(tuple(c)))), f"{args.split}: with them (in-sample)")
-    print_summary(summarise(reevaluate(recs, band_method())), f"{args.split}: bands.MODEL_FORM {bands.MODEL_FORM}")
+    if args.rows and Path(args.rows).exists():
+        rows_ = json.loads(Path(args.rows).read_text())
+    else:
+        if args.records:
+            recs = json.loads(Path(args.records).read_text())["cases"][: args.n]
+            args.split = recs[0]["split"]
+        else:
+            cache = Path(args.cache)
+            cache.mkdir(exist_ok=True)
+            recs = records(args.split, args.n, cache)
+        print_summary(summarise(recs), f"{args.split}: as identified (run.py's own predictions)")
+        rows_ = []
+        reevaluate(recs, band_method((0.0, 0.0, 0.0), rows_))
+        if args.rows:
+            Path(args.rows).write_text(json.dumps(rows_))
+    print("set + geometry only:     ", stats(rows_, (0.0, 0.0, 0.0)))
+    c = conformal(rows_)
+    print("split-conformal c_mode (90 %) of these rows:", [round(x, 6) for x in c])
+    print("with them (in-sample):   ", stats(rows_, c))
+    print(f"with bands.MODEL_FORM {bands.MODEL_FORM}:", stats(rows_, bands.MODEL_FORM))
 
 
 if __name__ == "__main__":

@@ -3,9 +3,10 @@
 Use it to measure, never to tune one case (issue 9). Public API::
 
     from benchmarks.realism.corpus import make_corpus, make_case, check_pairs, worn, elsewhere, KINDS
-    from benchmarks.realism.audio import record, write_case, audible_modes, clean_recording
+    from benchmarks.realism.audio import record, write_case, audible_modes, audibility_margins, write_check_pairs
+    from benchmarks.realism.corpus import without
     from benchmarks.realism.truth import TruthHolder, Profile, ExtraMass, truth_modes, truth_receptance
-    from benchmarks.realism.run import run_case, summarise
+    from benchmarks.realism.run import run_case, summarise, print_summary, reevaluate
 
     cases = make_corpus("validation", 24)      # or "calibration", "infamily" (disjoint seeds)
     case = cases[0]
@@ -19,12 +20,28 @@ Use it to measure, never to tune one case (issue 9). Public API::
     rec = record(case)                         # taptune.io.audio.Recording (deterministic)
     write_case(case, folder)                   # <name>.wav, <name>.toml, <name>_so<mm>.toml, <name>.truth.json
     pairs = check_pairs(n)                     # [(reference Case, other Case, "consistent" | "differs")]
-    worn(case, 0.5)                            # same holder, contact stiffness intensities x 0.5
+    worn(case, 0.5[, stickout_mm])             # same holder, contact stiffness intensities x 0.5
+    elsewhere(case, stickout_mm)               # same holder and tool clamped again (fresh ruler error)
+    without(case, "flute")                     # one deviation removed (attribution)
+    audibility_margins(case, analysis)         # dB of each truth mode over the noise floor (audible: >= 6)
+    write_check_pairs(n, folder)               # pair<k>/{reference,other}.{wav,toml}, expected.json
+
+    records = json.load(open("benchmarks/realism/baseline_validation.json"))["cases"]
+    new = reevaluate(records, lambda sets, asm, rec: my_predict(sets, asm))   # no re-identification
+    print_summary(summarise(new), "my bands")
+
+Each record: the case (described/truth, kinds, recording settings), ``labels`` (per truth
+mode: audible, margin_db, labelled_hz, right), ``peaks``, ``identification`` (param_sets,
+measured and model frequencies, warnings), ``predictions`` (per query and mode: truth_hz,
+predicted_hz, spread_hz, error_pct, covered, half_width_pct, measured, ruler_pct = how far
+the ruler error alone moves the truth), ``cpu_s``.
 
 Command line (one identification ≈ 5 CPU-s; results JSON keeps every param_set, so
 band methods can be re-evaluated offline with ``summarise``)::
 
-    python -m benchmarks.realism.run --split validation --n 24 --out results.json [--jobs 2]
+    python -m benchmarks.realism.run --split validation --n 24 --out results.json [--jobs 2] [--ablate KIND]
+    python -m benchmarks.realism.attribute --split validation --n 24   # truth-only, per deviation
 
-Baselines: ``benchmarks/realism/baseline_<split>.json``.
+Baselines (taptune 0c95237, before issue 9): ``benchmarks/realism/baseline_<split>.json``
+for ``validation`` (24), ``calibration`` (24) and ``infamily`` (12).
 """

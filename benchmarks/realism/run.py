@@ -31,6 +31,7 @@ from benchmarks.realism.audio import AUDIBLE_DB  # noqa: E402
 from benchmarks.realism.corpus import KINDS, make_case, without  # noqa: E402
 
 MODES = (1, 2, 3)
+LOUD_DB = 15.0
 
 
 def judge_labels(case, analysis, margins) -> list[dict]:
@@ -203,6 +204,10 @@ def summarise(records: list[dict]) -> dict:
             "audible_peak_mislabelled": sum(not lab["right"] and lab["peak_at_truth"] is not None for lab in audible),
             "audible_no_peak": sum(lab["peak_at_truth"] is None for lab in audible),
             "inaudible_labelled_wrong": sum(lab["wrong_peak"] for lab in labels if not lab["audible"]),
+            # Modes ≥ 15 dB over the floor: loud enough for the product's peak picker.
+            "loud_modes": sum(lab.get("margin_db") is not None and lab["margin_db"] >= LOUD_DB for lab in labels),
+            "loud_right": sum(lab["right"] for lab in labels
+                              if lab.get("margin_db") is not None and lab["margin_db"] >= LOUD_DB),
         },
         "transfer": _stats(preds),
         "transfer_measured_modes": _stats([p for p in preds if p["measured"]]),
@@ -224,6 +229,7 @@ def print_summary(s: dict, title: str) -> None:
           f"(wrong peak {lab['audible_wrong_peak']}, missed {lab['audible_missed']}; "
           f"peak there but mislabelled {lab['audible_peak_mislabelled']}, no peak picked {lab['audible_no_peak']}; "
           f"inaudible modes given a wrong peak: {lab['inaudible_labelled_wrong']})")
+    print(f"labels right / modes >= {LOUD_DB:g} dB over the noise floor: {lab['loud_right']}/{lab['loud_modes']}")
     print(f"{'predictions':24s} {'n':>4s} {'|err| med %':>11s} {'p90 %':>7s} {'max %':>7s} {'covered':>8s} {'±med %':>7s}"
           f" {'ruler med %':>11s}")
 

@@ -68,6 +68,11 @@ def print_summary(out: dict, result, stream=None) -> None:
         file=stream,
     )
     print(f"objective {result.objective:.4g}, {result.evaluations} evaluations, {result.seconds:.2f} s", file=stream)
+    outlook = out.get("transfer_outlook")
+    if outlook:
+        rel = [s / f for s, f in zip(outlook["bending_hz_spread"], outlook["bending_hz"])]
+        print(f"transfer: at {outlook['stickout']:g} mm the predicted f1–f3 are good to "
+              f"±{100 * min(rel):.1f}–{100 * max(rel):.1f} % (band: {outlook['band']['method']})", file=stream)
     for w in out["warnings"]:
         print(f"warning: {w}", file=stream)
 

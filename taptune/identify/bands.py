@@ -28,6 +28,7 @@ calibrate, measures it.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -147,8 +148,12 @@ def _with_flute_ratio(asm, delta):
     return replace(asm, tool=replace(t, segments=(t.segments[0], flute), flute_ratio=ratio))
 
 
+@functools.lru_cache(maxsize=32)
 def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3) -> dict:
     """Relative change of f1..fn [–] per stated tolerance, by central differences.
+
+    Cached: an identified assembly's sensitivities serve every prediction from it
+    (all arguments are frozen, hashable values).
 
     Returns
     -------

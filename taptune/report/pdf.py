@@ -2,8 +2,9 @@
 
 A page holds the measured spectrum with its peak labels and the fit
 (:func:`taptune.report.fit_plot.draw_identification`), the identified parameters with
-their spread over the near-optimal set, predicted f1–f3 ± spread at the recorded
-stick-out and ±10/20 mm, and the provenance (file, sha256, date, seed).
+their spread over the near-optimal set, predicted f1–f3 ± the honest band at the
+recorded stick-out and ±10/20 mm with how the band was made, and the provenance (file,
+sha256, date, seed).
 
 The work is split so that a batch can do the expensive part (predictions) in its worker
 processes: :func:`report_pages` turns an identification into picklable
@@ -19,6 +20,7 @@ from pathlib import Path
 from typing import Sequence
 
 from taptune.errors import InputError
+from taptune.identify.bands import WIDE_BAND
 
 PAGE_SIZE_IN = (11.69, 8.27)  # A4 landscape
 STICKOUT_OFFSETS_MM = (-20.0, -10.0, 0.0, 10.0, 20.0)
@@ -38,6 +40,8 @@ class PredictionRow:
     bending_hz_spread: tuple[float, ...] = ()
     damping_ratio: float | None = None
     note: str = ""
+    band: dict | None = None  # the band's make-up (identify.bands.Band.to_dict)
+    band_text: str = ""  # how sure, in plain words
 
 
 @dataclass(frozen=True)
@@ -85,19 +89,43 @@ def report_stickouts_mm(stickout_mm: float) -> list[float]:
     return [round(stickout_mm + d, 6) for d in STICKOUT_OFFSETS_MM]
 
 
-def predict_rows(param_sets, assembly, model_options=None, relative_floor: float = 5e-4) -> tuple[PredictionRow, ...]:
-    """Predictions at :func:`report_stickouts_mm`; an impossible stick-out gets a note, not an error."""
+def predict_rows(param_sets, assembly, model_options=None, relative_floor: float = 5e-4,
+                 identified=None) -> tuple[PredictionRow, ...]:
+    """Predictions at :func:`report_stickouts_mm`; an impossible stick-out gets a note, not an error.
+
+    ``identified`` are the assemblies the parameters were identified on (default
+    ``[assembly]``): they set the honest band (:mod:`taptune.identify.bands`).
+    """
     from taptune.identify import predict
 
+    identified = list(identified) if identified else [assembly]
     rows = []
     for s in report_stickouts_mm(assembly.stickout * 1e3):
         try:
-            p = predict(param_sets, assembly.with_stickout(s * 1e-3), model_options, relative_floor=relative_floor)
+            p = predict(param_sets, assembly.with_stickout(s * 1e-3), model_options, relative_floor=relative_floor,
+                        identified=identified)
         except InputError:
             rows.append(PredictionRow(s, note="geometry not possible"))
             continue
-        rows.append(PredictionRow(s, p.bending_hz, p.bending_hz_spread, p.damping_ratio[0]))
+        rows.append(PredictionRow(s, p.bending_hz, p.bending_hz_spread, p.damping_ratio[0],
+                                  band=p.band.to_dict(), band_text=p.band_text()))
     return tuple(rows)
+
+
+def band_lines(rows: Sequence[PredictionRow], width: int = 66) -> list[str]:
+    """How the ± of the prediction table was made, for the page (the farthest stick-out's words)."""
+    rows = [r for r in rows if r.band]
+    if not rows:
+        return []
+    far = max(rows, key=lambda r: r.band.get("delta_stickout_mm") or 0.0)
+    b = far.band
+    lines = textwrap.wrap(f"band ± = {b['method']} (set: near-optimal fits; geometry: stated tolerances; "
+                          f"model form: calibrated, {b['calibration']})", width, subsequent_indent="  ")
+    lines += textwrap.wrap(f"at {far.stickout_mm:g} mm: {far.band_text}", width, subsequent_indent="  ")
+    if b.get("recordings", 0) < 2 and max(s / f for s, f in zip(far.bending_hz_spread, far.bending_hz)) > WIDE_BAND:
+        lines += textwrap.wrap("to narrow it: tap once more at a stick-out ~20 mm different and identify both "
+                               "recordings together", width, subsequent_indent="  ")
+    return lines
 
 
 def _sha256(path: str) -> str:
@@ -127,7 +155,7 @@ def report_pages(result, analyses, recordings, assemblies, model_options=None) -
             date=date,
             result=recording_view(result, k),
             analysis=analysis,
-            predictions=predict_rows(result.param_sets, asm, model_options, result.relative_floor),
+            predictions=predict_rows(result.param_sets, asm, model_options, result.relative_floor, assemblies),
             joint_files=files if joint else (),
             joint_objective=result.objective if joint else None,
         ))
@@ -197,6 +225,7 @@ def provenance_text(page: ReportPage) -> str:
     if page.joint_files:
         others = [Path(f).name for f in page.joint_files if f != page.file]
         lines.append(_shorten("joint fit with " + ", ".join(others), 80))
+    lines += band_lines(page.predictions)
     warnings = list(getattr(page.analysis, "warnings", ())) + list(r.warnings)
     for w in warnings[:3]:
         lines += textwrap.wrap("warning: " + w, 66, subsequent_indent="  ")[:2]
