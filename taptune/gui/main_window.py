@@ -108,7 +108,7 @@ def run_identification(analyses, assemblies, options, progress=None):
     from taptune.identify import identify
 
     result = identify(list(analyses), list(assemblies), options, progress=progress)
-    advice = second_tap_advice(result, assemblies[0], options.model) if len(analyses) == 1 else None
+    advice = second_tap_advice(result, assemblies[0]) if len(analyses) == 1 else None
     return result, advice
 
 

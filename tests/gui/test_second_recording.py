@@ -80,27 +80,25 @@ def test_second_recording_needs_a_valid_second_stickout(qtbot, window, generated
 
 
 def test_advice_asks_for_a_second_tap_only_when_the_bands_are_wide(reference_assembly):
-    from taptune.gui.advice import second_tap_advice, widest_band
-    from taptune.identify.bands import WIDE_BAND
+    import dataclasses
+
+    from taptune.gui.advice import second_tap_advice
+    from taptune.io.assembly import Tolerances
     from taptune.model.params import HolderParams
 
     from tests.gui.conftest import HOLDER_A
 
     best = HolderParams(**HOLDER_A)
-    # One set (nothing to part ways): the fits part is the 0.05 % floor; the geometry
-    # tolerances widen the whole band, but a second tap would not narrow them.
+    # Geometry known exactly and one parameter set: the band at +20 mm is the 0.05 % floor.
+    exact = dataclasses.replace(reference_assembly, tolerances=Tolerances(0.0, 0.0, 0.0))
     tight = SimpleNamespace(param_sets=(best,), relative_floor=5e-4)
-    fits, whole, _mode, _stickout = widest_band(tight, reference_assembly)
-    assert fits == pytest.approx(5e-4) and whole > fits
-    assert second_tap_advice(tight, reference_assembly) is None
-    # A near-optimal set with a 3x stiffer rotational contact parts ways at other stick-outs.
+    assert second_tap_advice(tight, exact) is None
+    # A near-optimal set with a 3x stiffer rotational contact parts ways at 73.5 mm.
     loose = SimpleNamespace(param_sets=(best, HolderParams(**{**HOLDER_A, "k_rr": 3 * HOLDER_A["k_rr"],
                                                             "k_tt": HOLDER_A["k_tt"] / 3})),
                             relative_floor=5e-4)
-    fits, whole, mode, stickout = widest_band(loose, reference_assembly)
-    assert WIDE_BAND < fits <= whole and stickout in (43.5, 63.5)
-    text = second_tap_advice(loose, reference_assembly)
-    assert f"at {stickout:g} mm" in text and f"on f{mode}" in text and "2nd stick-out" in text
+    text = second_tap_advice(loose, exact)
+    assert "At 73.5 mm" in text and "2nd stick-out" in text and "what the tap cannot tell apart" in text
 
 
 def test_banner_offers_the_second_tap(qtbot, window, monkeypatch):
