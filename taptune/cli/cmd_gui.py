@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-VIEWS = ("record", "spectrum", "fit", "predict", "library")
+VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library", "check")
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -21,26 +21,42 @@ def add_parser(sub, name: str, help_text: str) -> None:
     p = sub.add_parser(name, help=help_text, description=help_text + ".")
     p.add_argument("wav", nargs="?", metavar="WAV", help="recording to open and analyse")
     p.add_argument("--assembly", metavar="FILE", help="assembly file (default: the .toml beside the WAV)")
+    p.add_argument("--second", metavar="WAV",
+                   help="a recording of the same holder and tool at another stick-out (its .toml beside it "
+                        "gives the stick-out); both are identified together")
     p.add_argument("--library", metavar="PATH", help="holder library file")
     p.add_argument("--holder", metavar="NAME", help="open the predictor with this library holder (and the assembly's tool)")
+    p.add_argument("--machine", metavar="MACHINE_TOML",
+                   help="machine file for the Machine view (tool-point FRF and lobes; remembered)")
     p.add_argument("--screenshot", metavar="PNG", help="save a picture of the window to PNG and exit")
     p.add_argument("--size", type=_size, default=(1366, 768), metavar="WxH",
                    help="window size in pixels (default 1366x768)")
     p.add_argument("--view", choices=VIEWS, help="with --screenshot: the tab to show")
     p.add_argument("--identify", action="store_true", help="with --screenshot: identify the holder first")
+    p.add_argument("--check", action="store_true",
+                   help="with --screenshot: check WAV against --holder first (the check is saved to its history)")
 
 
 def run(args) -> int:
     from taptune.errors import InputError
 
-    if args.wav and not Path(args.wav).is_file():
-        raise InputError(f"{args.wav}: no such file")
+    for wav in (args.wav, args.second):
+        if wav and not Path(wav).is_file():
+            raise InputError(f"{wav}: no such file")
+    if args.second and not args.wav:
+        raise InputError("--second needs the first recording (WAV) too")
     if args.assembly:
         from taptune.io.assembly import load_assembly
 
         load_assembly(args.assembly)  # a bad file is a one-line error before any window opens
-    if (args.view or args.identify) and not args.screenshot:
-        raise InputError("--view and --identify only apply with --screenshot")
+    if args.machine:
+        from taptune.io.machine import load_machine
+
+        load_machine(args.machine)
+    if (args.view or args.identify or args.check) and not args.screenshot:
+        raise InputError("--view, --identify and --check only apply with --screenshot")
+    if args.check and not (args.wav and args.holder):
+        raise InputError("--check needs a recording (WAV) and --holder NAME")
     holder = None
     if args.holder:
         from taptune.library import HolderLibrary, default_library_path
@@ -49,4 +65,5 @@ def run(args) -> int:
     from taptune.gui.app import run as run_app
 
     return run_app(args.wav, args.assembly, args.library, args.screenshot, args.size, args.view, args.identify,
-                   holder)
+                   holder, second=args.second, machine=args.machine,
+                   check=args.check)

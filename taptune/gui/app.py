@@ -82,6 +82,8 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
     if window.predictor.busy:
         wait_for(window.predictor.predicted, predictor_timeout_s)
+    if window.machine.busy:
+        wait_for(window.machine.updated, predictor_timeout_s)
     for _ in range(3):
         loop = QEventLoop()
         QTimer.singleShot(50, loop.quit)
@@ -89,10 +91,13 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
 
 
 def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
-        identify: bool = False, holder=None) -> int:
+        identify: bool = False, holder=None, second=None, machine=None, check: bool = False) -> int:
     """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
 
-    ``holder`` (a library entry) opens the predictor with it and the assembly's tool.
+    ``holder`` (a library entry) opens the predictor with it and the assembly's tool;
+    ``second`` is a recording at another stick-out, identified jointly with ``wav``;
+    ``machine`` a machine file for the Machine view (remembered unless taking a screenshot);
+    ``check`` checks ``wav`` against ``holder`` before the screenshot.
 
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
@@ -108,15 +113,17 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     from taptune.library import default_library_path
 
     window = MainWindow(default_library_path(library))
+    if machine:
+        window.machine.load_machine(str(machine), remember=not screenshot)
     previous_hook = sys.excepthook
     install_excepthook(window)
     try:
-        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder)
+        return _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second, check)
     finally:
         sys.excepthook = previous_hook
 
 
-def _show(app, window, wav, assembly, screenshot, size, view, identify, holder) -> int:
+def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second=None, check=False) -> int:
     window.resize(*size)
     if assembly:
         window.assembly_panel.load_file(assembly)
@@ -126,8 +133,17 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder) 
     status = 0
     if wav:
         window.load_recording(str(wav), assembly)
+        if second and not screenshot:
+            def then_second(_analysis):
+                window.analysis_ready.disconnect(then_second)
+                window.load_second_recording(str(second))
+
+            window.analysis_ready.connect(then_second)
         if screenshot:
             outcome = _wait_analysis(window)
+            if outcome == "ok" and second:
+                window.load_second_recording(str(second))
+                outcome = _wait_analysis(window)
             if outcome != "ok":
                 print(f"taptune gui: {outcome}", file=sys.stderr)
                 status = 2
@@ -136,6 +152,13 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder) 
                 ended = wait_for(window.identification_ended, SCREENSHOT_TIMEOUT_S)
                 if not ended or ended[0] != "finished":
                     print("taptune gui: identification did not finish", file=sys.stderr)
+                    status = 1
+            if check and status == 0:
+                window.library_view.select(holder.name)
+                window.start_check()
+                ended = wait_for(window.check_ended, SCREENSHOT_TIMEOUT_S)
+                if not ended or ended[0] is None:
+                    print("taptune gui: the check did not finish", file=sys.stderr)
                     status = 1
     if not screenshot:
         return app.exec()

@@ -160,6 +160,7 @@ class AssemblyPanel(QWidget):
     """
 
     assembly_changed = Signal(object)
+    second_stickout_changed = Signal(float)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -177,10 +178,17 @@ class AssemblyPanel(QWidget):
             combo.setMinimumContentsLength(18)
         self.stickout = _spin(1.0, 500.0, 1)
         self.stickout.setToolTip("Length of tool outside the holder front face")
+        # A second tap of the same holder and tool at another stick-out, fitted jointly:
+        # 0 shows "none" (one recording only).
+        self.second_stickout = _spin(0.0, 500.0, 1)
+        self.second_stickout.setSpecialValueText("none")
+        self.second_stickout.setToolTip("Stick-out of a second recording of the same holder and tool "
+                                        "(identified together with the first): 'none' for one recording")
         pick = QFormLayout()
         pick.addRow("Holder", self.holder_combo)
         pick.addRow("Tool", self.tool_combo)
         pick.addRow("Stick-out", self.stickout)
+        pick.addRow("2nd stick-out", self.second_stickout)
 
         # Holder dimensions.
         self.holder_name = QLineEdit()
@@ -255,6 +263,7 @@ class AssemblyPanel(QWidget):
         for widget in (self.stickout, self.clamp, self.total_length, self.shank, self.flute_length,
                        self.flute_diameter, self.flute_ratio):
             widget.valueChanged.connect(self._edited)
+        self.second_stickout.valueChanged.connect(lambda v: emit(self.second_stickout_changed, float(v)))
         self.holder_name.editingFinished.connect(self._edited)
         self.tool_name.editingFinished.connect(self._edited)
         self.interface.currentTextChanged.connect(self._edited)
@@ -332,6 +341,26 @@ class AssemblyPanel(QWidget):
 
     def set_stickout_mm(self, value: float) -> None:
         self.stickout.setValue(value)
+
+    def set_second_stickout_mm(self, value: float | None) -> None:
+        """The stick-out of the second recording [mm]; None or 0: no second recording."""
+        self.second_stickout.setValue(value or 0.0)
+
+    def second_assembly(self):
+        """``(assembly, problem)``: the holder and tool at the 2nd stick-out, or None and why not."""
+        from taptune.errors import InputError
+
+        value = self.second_stickout.value()
+        if self._assembly is None:
+            return None, "describe the assembly first"
+        if value <= 0.0:
+            return None, "set the 2nd stick-out (left, under Stick-out)"
+        if abs(value - self.stickout.value()) < 0.05:
+            return None, "the 2nd stick-out must differ from the first"
+        try:
+            return self._assembly.with_stickout(value * MM), ""
+        except InputError as err:
+            return None, f"2nd stick-out {value:g} mm: {err}"
 
     def _fill_holder(self) -> None:
         h = self._holder

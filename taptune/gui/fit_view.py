@@ -10,7 +10,7 @@ import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
-from taptune.gui.layout import column, hsplit, read_only_table
+from taptune.gui.layout import column, hsplit, read_only_table, set_rows
 from taptune.gui.plotting import MEASURED, MODEL, PlotCanvas
 
 PARAM_ROWS = (
@@ -53,47 +53,64 @@ class FitView(QWidget):
     def clear(self, text: str = "Identify the holder to see the fit.") -> None:
         self.identification = None
         self.canvas.message(text)
+        set_rows(self.freq_table, 3)
         self.freq_table.clearContents()
         self.param_table.clearContents()
         self.summary.setText("")
 
-    def show_identification(self, result, title: str = "") -> None:
-        """Show ``result`` (an Identification); the first recording where it is a joint fit."""
+    def show_identification(self, result, title: str = "", names=None) -> None:
+        """Show ``result`` (an Identification): one plot and three table rows per recording.
+
+        ``names`` label the recordings of a joint fit (e.g. file and stick-out).
+        """
         self.identification = result
+        n = len(result.bending_measured_hz)
+        names = list(names) if names else [f"recording {i + 1}" for i in range(n)]
         fig = self.canvas.figure
         fig.clear()
         with self.canvas.styled():
-            ax = fig.add_subplot(111)
-            f = np.asarray(result.window_hz[0])
-            ax.plot(f, np.asarray(result.measured_shape[0]), color=MEASURED, lw=1.6, label="measured (average of taps)")
-            ax.plot(f, np.asarray(result.model_shape[0]), color=MODEL, lw=1.3, ls="--", label="identified model")
+            for i in range(n):
+                ax = fig.add_subplot(n, 1, i + 1)
+                f = np.asarray(result.window_hz[i])
+                ax.plot(f, np.asarray(result.measured_shape[i]), color=MEASURED, lw=1.6,
+                        label="measured (average of taps)")
+                ax.plot(f, np.asarray(result.model_shape[i]), color=MODEL, lw=1.3, ls="--", label="identified model")
+                ax.set_ylabel("level / peak")
+                if n == 1:
+                    ax.set_title(title or "Around bending mode 1", loc="left")
+                else:  # one line per plot: the recording (the holder is in the window's other views)
+                    ax.set_title(f"{names[i]}" + (f" — joint fit of {n} recordings" if i == 0 else ""), loc="left")
+                if i == 0:
+                    ax.text(0.01, 0.98, "the window the fit compares:\nf1 ± 100 Hz", transform=ax.transAxes,
+                            va="top", ha="left", fontsize=8, color="#555555")
+                    ax.legend(loc="upper right", framealpha=0.9)
             ax.set_xlabel("frequency [Hz]")
-            ax.set_ylabel("level, normalised to the peak")
-            ax.set_title(title or "Around bending mode 1", loc="left")
-            ax.text(0.01, 0.98, "the window the fit compares:\nf1 ± 100 Hz", transform=ax.transAxes,
-                    va="top", ha="left", fontsize=8, color="#555555")
-            ax.legend(loc="upper right", framealpha=0.9)
         self.canvas.draw_idle()
 
-        measured = result.bending_measured_hz[0]
-        model = result.bending_model_hz[0]
-        zeta = result.damping_model[0]
-        for r in range(3):
-            m = measured[r] if r < len(measured) else None
-            f_model = model[r] if r < len(model) else float("nan")
-            self.freq_table.setItem(r, 0, _cell(f"f{r + 1}", Qt.AlignCenter))
-            self.freq_table.setItem(r, 1, _cell(f"{m:,.1f}" if m is not None else "not found"))
-            self.freq_table.setItem(r, 2, _cell(f"{f_model:,.1f}"))
-            self.freq_table.setItem(r, 3, _cell(f"{100 * (f_model / m - 1):+.2f} %" if m else "–"))
-            self.freq_table.setItem(r, 4, _cell(f"{100 * zeta[r]:.3f}" if r < len(zeta) else "–"))
+        set_rows(self.freq_table, 3 * n)
+        for i in range(n):
+            measured = result.bending_measured_hz[i]
+            model = result.bending_model_hz[i]
+            zeta = result.damping_model[i]
+            for k in range(3):
+                r = 3 * i + k
+                m = measured[k] if k < len(measured) else None
+                f_model = model[k] if k < len(model) else float("nan")
+                self.freq_table.setItem(r, 0, _cell(f"f{k + 1}" + (f" · {i + 1}" if n > 1 else ""), Qt.AlignCenter))
+                self.freq_table.setItem(r, 1, _cell(f"{m:,.1f}" if m is not None else "not found"))
+                self.freq_table.setItem(r, 2, _cell(f"{f_model:,.1f}"))
+                self.freq_table.setItem(r, 3, _cell(f"{100 * (f_model / m - 1):+.2f} %" if m else "–"))
+                self.freq_table.setItem(r, 4, _cell(f"{100 * zeta[k]:.3f}" if k < len(zeta) else "–"))
         spread = result.param_spread
         for r, (key, label, unit, fmt) in enumerate(PARAM_ROWS):
             self.param_table.setItem(r, 0, _cell(label, Qt.AlignLeft | Qt.AlignVCenter))
             self.param_table.setItem(r, 1, _cell(fmt.format(getattr(result.params, key))))
             self.param_table.setItem(r, 2, _cell(fmt.format(spread[key])))
             self.param_table.setItem(r, 3, _cell(unit, Qt.AlignLeft | Qt.AlignVCenter))
-        text = (f"Objective {result.objective:.3g} after {result.evaluations:,} model evaluations "
-                f"in {result.seconds:.1f} s; {len(result.param_sets)} near-optimal parameter sets.")
+        joint = "Joint fit of " + " and ".join(f"{i + 1}: {name}" for i, name in enumerate(names)) + ". "
+        text = (joint if n > 1 else "") + (
+            f"Objective {result.objective:.3g} after {result.evaluations:,} model evaluations "
+            f"in {result.seconds:.1f} s; {len(result.param_sets)} near-optimal parameter sets.")
         if result.warnings:
             text += "\n⚠ " + "\n⚠ ".join(result.warnings)
         self.summary.setText(text)

@@ -27,10 +27,15 @@ def read_only_table(rows: int, headers: list[str]) -> QTableWidget:
     table.setEditTriggers(QAbstractItemView.NoEditTriggers)
     table.setSelectionMode(QAbstractItemView.NoSelection)
     table.verticalHeader().setDefaultSectionSize(22)
-    # Exactly as tall as its rows: no empty grid below the numbers.
-    table.setFixedHeight(table.horizontalHeader().sizeHint().height() + rows * 22 + 2 * table.frameWidth() + 2)
     table.setVerticalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
+    set_rows(table, rows)
     return table
+
+
+def set_rows(table: QTableWidget, rows: int) -> None:
+    """Give a :func:`read_only_table` ``rows`` rows, exactly as tall as them: no empty grid below the numbers."""
+    table.setRowCount(rows)
+    table.setFixedHeight(table.horizontalHeader().sizeHint().height() + rows * 22 + 2 * table.frameWidth() + 2)
 
 
 def column(*items, margins: int = 0) -> QWidget:

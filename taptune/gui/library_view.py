@@ -21,12 +21,13 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from taptune.gui.check_view import checks_html
 from taptune.gui.fit_view import PARAM_ROWS
 from taptune.gui.layout import hsplit
 from taptune.gui.messages import show_error, show_info
 from taptune.gui.signals import emit
 
-COLUMNS = ("holder", "interface", "identifications", "last identified")
+COLUMNS = ("holder", "interface", "identifications", "last identified", "last check")
 
 
 def entry_html(entry) -> str:
@@ -52,6 +53,7 @@ def entry_html(entry) -> str:
         f"<p><b>Parameters</b> ({len(entry.param_sets)} near-optimal sets)</p>"
         f"<table cellspacing=4>{rows}</table>"
         f"<p><b>Identifications</b></p><ul>{history or '<li>none recorded</li>'}</ul>"
+        f"<p><b>Checks by one tap</b> (newest first)</p><ul>{checks_html(entry)}</ul>"
     )
 
 
@@ -64,10 +66,13 @@ class LibraryView(QWidget):
         The entries after any change (also after opening another library).
     use_for_prediction(object)
         The chosen :class:`~taptune.library.HolderEntry`.
+    use_on_machine(object)
+        The chosen entry, for the Machine view (lobes with the panel's tool and stick-out).
     """
 
     changed = Signal(dict)
     use_for_prediction = Signal(object)
+    use_on_machine = Signal(object)
 
     def __init__(self, library_path, parent=None):
         super().__init__(parent)
@@ -90,6 +95,7 @@ class LibraryView(QWidget):
         row = QHBoxLayout()
         for key, text, slot in (
             ("predict", "Use for prediction", self._use),
+            ("machine", "Lobes on the machine", self._use_on_machine),
             ("import", "Import…", self._import_dialog),
             ("export", "Export…", self._export_dialog),
             ("remove", "Remove…", self._remove_dialog),
@@ -135,14 +141,18 @@ class LibraryView(QWidget):
             show_error(self, "Cannot read the holder library", str(err))
         self.table.setRowCount(len(self.entries))
         for r, entry in enumerate(self.entries.values()):
+            checks = getattr(entry, "checks", ())
             values = (entry.name, entry.interface, str(len(entry.identifications)),
-                      (entry.last_identified or "–").replace("T", " ").rstrip("Z"))
+                      (entry.last_identified or "–").replace("T", " ").rstrip("Z"),
+                      checks[-1].verdict if checks else "–")
             for c, text in enumerate(values):
                 self.table.setItem(r, c, QTableWidgetItem(text))
         if not self.entries:
             self.details.setHtml("<p>The library is empty: identify a holder and save it, or import a library file.</p>")
         elif self.table.currentRow() < 0:
             self.table.selectRow(0)
+        else:
+            self._selected()  # the same row may hold newer data (a check, a new identification)
         self._update_buttons()
         emit(self.changed, self.entries)
 
@@ -165,7 +175,7 @@ class LibraryView(QWidget):
 
     def _update_buttons(self) -> None:
         has = self.selected() is not None
-        for key in ("predict", "remove"):
+        for key in ("predict", "machine", "remove"):
             self.buttons[key].setEnabled(has)
         self.buttons["export"].setEnabled(bool(self.entries))
 
@@ -175,6 +185,11 @@ class LibraryView(QWidget):
         entry = self.selected()
         if entry is not None:
             emit(self.use_for_prediction, entry)
+
+    def _use_on_machine(self) -> None:
+        entry = self.selected()
+        if entry is not None:
+            emit(self.use_on_machine, entry)
 
     def export_to(self, path, format: str | None = None) -> int | None:
         """Export the library (JSON or CSV from the suffix); a dialog reports the outcome."""

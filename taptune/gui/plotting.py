@@ -32,11 +32,11 @@ BAND = "#f5cba7"
 class PlotCanvas(FigureCanvasQTAgg):
     """A figure in a widget (no pyplot: no global state shared between views)."""
 
-    def __init__(self, parent=None, height_in: float = 3.0):
+    def __init__(self, parent=None, height_in: float = 3.0, layout: str | None = "constrained"):
         import matplotlib
 
         with matplotlib.rc_context(STYLE):
-            self.figure = Figure(figsize=(6.0, height_in), layout="constrained")
+            self.figure = Figure(figsize=(6.0, height_in), layout=layout)
         super().__init__(self.figure)
         self.setParent(parent)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)

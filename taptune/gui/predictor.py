@@ -13,17 +13,20 @@ from dataclasses import dataclass
 
 import numpy as np
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QTableWidgetItem, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QGridLayout, QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
+from taptune.gui.latest import LatestOnly
 from taptune.gui.layout import read_only_table
 from taptune.gui.plotting import BENDING, MEASURED, PlotCanvas
 from taptune.gui.signals import emit
-from taptune.gui.workers import TaskRunner
+from taptune.gui.stickout import StickoutSlider
 
 MM = 1e-3
 # Receptance plot grid [Hz]: up to 25 kHz covers f1–f3 of usual assemblies.
 FREQ_HZ = np.linspace(20.0, 25000.0, 2500)
-SLIDER_STEPS_PER_MM = 10
+# The geometry tolerances of identify.bands, in words.
+GEOMETRY_PARTS = {"stickout": "stick-out here", "stickout_identified": "stick-out when tapped",
+                  "diameter": "holder diameters", "flute_ratio": "flute ratio"}
 
 
 @dataclass(frozen=True)
@@ -35,6 +38,7 @@ class PredictorSource:
     assembly: object
     model_options: object = None
     relative_floor: float = 5e-4  # see identify.predict
+    identified: tuple = ()  # the assemblies the holder was identified on (the band's Δ stick-out)
 
 
 def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ_HZ):
@@ -44,17 +48,10 @@ def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ
 
     options = source.model_options or ModelOptions()
     assembly = source.assembly.with_stickout(stickout_mm * MM)
-    prediction = predict(source.param_sets, assembly, options, relative_floor=source.relative_floor)
+    prediction = predict(source.param_sets, assembly, options, relative_floor=source.relative_floor,
+                         identified=list(source.identified))
     h = tip_receptance(build_model(assembly, options), source.param_sets[0], freq_hz)
     return stickout_mm, prediction, np.asarray(h)
-
-
-def stickout_range_mm(assembly) -> tuple[float, float]:
-    """Stick-outs the slider offers [mm]: from the holder's depth to 5 mm of grip left."""
-    total = assembly.tool.total_length / MM
-    lo = max(1.0, total - assembly.holder.length / MM + 0.1)
-    hi = max(lo + 1.0, total - 5.0)
-    return float(np.ceil(lo)), float(np.floor(hi))
 
 
 class Predictor(QWidget):
@@ -73,44 +70,43 @@ class Predictor(QWidget):
         super().__init__(parent)
         self.source: PredictorSource | None = None
         self.prediction = None
-        self._runner = TaskRunner(self)
-        self._running = False
-        self._pending: float | None = None
+        self._updates = LatestOnly(self._done, self._failed, self)
 
         self.source_label = QLabel()
         self.source_label.setWordWrap(True)
-        self.slider = QSlider(Qt.Horizontal)
-        self.spin = QDoubleSpinBox()
-        self.spin.setDecimals(1)
-        self.spin.setSuffix(" mm")
-        self.spin.setSingleStep(0.5)
-        self.spin.setKeyboardTracking(False)
-        self.slider.valueChanged.connect(lambda v: self.spin.setValue(v / SLIDER_STEPS_PER_MM))
-        self.spin.valueChanged.connect(self._spin_changed)
-        row = QHBoxLayout()
-        row.addWidget(QLabel("Stick-out"))
-        row.addWidget(self.slider, 1)
-        row.addWidget(self.spin)
+        self.stickout = StickoutSlider()
+        self.stickout.changed.connect(self.request)
+        self.slider, self.spin = self.stickout.slider, self.stickout.spin
 
-        self.table = read_only_table(3, ["mode", "predicted Hz (± spread)", "damping ζ % (± spread)"])
+        self.table = read_only_table(3, ["mode", "predicted Hz ± band", "damping ζ % (± spread)"])
         self.table.setMinimumWidth(420)
         self.note = QLabel(
-            "Values from the best fit; the spread is the largest deviation of any other "
-            "near-optimal fit from it: the tap cannot tell those fits apart."
+            "Values from the best fit. The ± band holds the near-optimal fits (the tap cannot tell them "
+            "apart), the geometry tolerances and what the model leaves out: how, below. The damping "
+            "spread is the near-optimal fits' alone."
         )
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #555555;")
         self.canvas = PlotCanvas(self)
         # Numbers on top, the curve below: the table keeps its columns readable on a
         # 1366 px laptop and the plot gets the full width.
-        numbers = QHBoxLayout()
-        numbers.addWidget(self.table)
-        numbers.addWidget(self.note, 1)
+        # How each ± is made (identify.bands): the components per mode and the calibration.
+        self.band_table = read_only_table(3, ["mode", "± total", "near-optimal fits", "geometry", "model form"])
+        self.band_table.setMinimumWidth(420)
+        self.band_note = QLabel()
+        self.band_note.setWordWrap(True)
+        self.band_note.setStyleSheet("color: #555555;")
+        numbers = QGridLayout()
+        numbers.addWidget(self.table, 0, 0)
+        numbers.addWidget(self.note, 0, 1)
+        numbers.addWidget(self.band_table, 1, 0)
+        numbers.addWidget(self.band_note, 1, 1)
+        numbers.setColumnStretch(1, 1)
 
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.source_label)
-        layout.addLayout(row)
+        layout.addWidget(self.stickout)
         layout.addLayout(numbers)
         layout.addWidget(self.canvas, 1)
         self.set_source(None)
@@ -119,68 +115,39 @@ class Predictor(QWidget):
         """Use ``source`` (None: nothing to predict yet) and predict at its stick-out."""
         self.source = source
         enabled = source is not None
-        self.slider.setEnabled(enabled)
-        self.spin.setEnabled(enabled)
+        self.stickout.setEnabled(enabled)
         if source is None:
             self.source_label.setText("Identify a holder, or pick one in the Library tab, to predict other stick-outs.")
             self.canvas.message("No holder parameters yet.")
             self.table.clearContents()
+            self._show_band(None)
             return
         self.source_label.setText(f"Holder parameters: {source.label}. Tool: {source.assembly.tool.name}.")
-        lo, hi = stickout_range_mm(source.assembly)
+        self.stickout.set_assembly(source.assembly)
         current = source.assembly.stickout / MM
-        for w in (self.slider, self.spin):
-            w.blockSignals(True)
-        self.slider.setRange(int(lo * SLIDER_STEPS_PER_MM), int(hi * SLIDER_STEPS_PER_MM))
-        self.spin.setRange(lo, hi)
-        self.spin.setValue(current)
-        self.slider.setValue(int(round(current * SLIDER_STEPS_PER_MM)))
-        for w in (self.slider, self.spin):
-            w.blockSignals(False)
         self.request(current)
 
     def set_stickout_mm(self, value: float) -> None:
         """Move the stick-out (as the user would with the field)."""
-        self.spin.setValue(value)
-
-    def _spin_changed(self, value: float) -> None:
-        self.slider.blockSignals(True)
-        self.slider.setValue(int(round(value * SLIDER_STEPS_PER_MM)))
-        self.slider.blockSignals(False)
-        self.request(value)
+        self.stickout.set_value(value)
 
     def request(self, stickout_mm: float) -> None:
         """Predict at ``stickout_mm``; while a prediction runs, keep only the latest request."""
-        if self.source is None:
-            return
-        if self._running:
-            self._pending = stickout_mm
-            return
-        self._running = True
-        self._runner.start(compute_prediction, self.source, stickout_mm, with_progress=False,
-                           on_finished=self._done, on_failed=self._failed)
+        if self.source is not None:
+            self._updates.request(compute_prediction, self.source, stickout_mm)
 
     @property
     def busy(self) -> bool:
-        return self._running or self._pending is not None
-
-    def _next(self) -> None:
-        self._running = False
-        if self._pending is not None:
-            value, self._pending = self._pending, None
-            self.request(value)
+        return self._updates.busy
 
     def _failed(self, message: str) -> None:
         self.canvas.message(f"Cannot predict here:\n{message}")
         self.table.clearContents()
+        self._show_band(None)
         emit(self.failed, message)
-        self._next()
 
     def _done(self, result) -> None:
-        stickout_mm, prediction, h = result
-        if self._pending is None:
-            self._show(stickout_mm, prediction, h)
-        self._next()
+        self._show(*result)
 
     def _show(self, stickout_mm: float, prediction, h) -> None:
         self.prediction = prediction
@@ -193,6 +160,7 @@ class Predictor(QWidget):
                 item = QTableWidgetItem(text)
                 item.setTextAlignment(Qt.AlignCenter if c == 0 else Qt.AlignRight | Qt.AlignVCenter)
                 self.table.setItem(r, c, item)
+        self._show_band(prediction)
         fig = self.canvas.figure
         fig.clear()
         with self.canvas.styled():
@@ -211,10 +179,32 @@ class Predictor(QWidget):
             ax.set_xlabel("frequency [kHz]")
             ax.set_ylabel("|H| [m/N]")
             ax.set_title(f"Free-free tip receptance at stick-out {stickout_mm:.1f} mm (best-fit parameters; "
-                         "bands: f1–f3 ± spread)", loc="left")
+                         "shaded: f1–f3 ± band)", loc="left")
         self.canvas.draw_idle()
         emit(self.predicted, prediction)
 
+    def _show_band(self, prediction) -> None:
+        """The make-up of each ± (near-optimal fits, geometry tolerances, model form) and how it was calibrated."""
+        band = getattr(prediction, "band", None)
+        self.band_table.setVisible(band is not None)
+        self.band_note.setVisible(band is not None)
+        if band is None:
+            return
+        for r, f in enumerate(prediction.bending_hz[: len(band.half_width_hz)]):
+            texts = (f"f{r + 1}", f"{band.half_width_hz[r]:,.0f} Hz", f"{band.set_hz[r]:,.0f}",
+                     f"{band.geometry_hz[r]:,.0f}", f"{band.model_form_hz[r]:,.0f}")
+            for c, text in enumerate(texts):
+                item = QTableWidgetItem(text)
+                item.setTextAlignment(Qt.AlignCenter if c == 0 else Qt.AlignRight | Qt.AlignVCenter)
+                self.band_table.setItem(r, c, item)
+        parts = ", ".join(f"{GEOMETRY_PARTS.get(name, name)} ±{max(v):,.0f}"
+                          for name, v in band.geometry_parts_hz.items())
+        recordings = ("no recorded identification" if band.recordings == 0
+                      else f"{band.recordings} recording{'s' if band.recordings != 1 else ''}")
+        self.band_note.setText(
+            f"{band.text(prediction.bending_hz)} Each ± = √(fits² + geometry² + model form²); the holder from "
+            f"{recordings}" + (f"; geometry, largest over f1–f3 [Hz]: {parts}" if parts else "")
+            + f". Calibration: {band.calibration}.")
+
     def shutdown(self) -> None:
-        self._pending = None
-        self._runner.shutdown()
+        self._updates.shutdown()

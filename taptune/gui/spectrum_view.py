@@ -97,7 +97,8 @@ class SpectrumView(QWidget):
         self._ax = None
         self._peak_xy = np.zeros((0, 2))
         self.canvas.mpl_connect("button_press_event", self._clicked)
-        self.clear("Record taps or open a recording (button, or drop a WAV/FLAC file here).")
+        self.clear("Record taps or open a recording (button, or drop an audio file here: "
+                   "WAV, FLAC, MP3, a phone's M4A…).")
 
     def clear(self, text: str) -> None:
         self.analysis = None

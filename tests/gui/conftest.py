@@ -32,9 +32,12 @@ def tap_sound(frequencies_hz, damping, amplitudes, onsets_s, seconds, fs=FS, noi
     return 0.5 * x / np.max(np.abs(x))
 
 
-@pytest.fixture(scope="session")
-def generated_recording(tmp_path_factory):
-    """A 5-tap WAV of the reference assembly (holder A) and its sidecar assembly file."""
+def write_recording(folder, stickout_mm: float, seed: int = 1, contact_factor: float = 1.0):
+    """A 5-tap WAV of the reference assembly (holder A) at ``stickout_mm`` and its sidecar assembly file.
+
+    ``contact_factor`` scales both contact stiffnesses (a worn or badly seated holder).
+    Returns ``(wav, toml, (f1, f2, f3) [Hz])``.
+    """
     import soundfile
 
     from taptune.io.assembly import load_assembly
@@ -42,16 +45,29 @@ def generated_recording(tmp_path_factory):
     from taptune.model.params import HolderParams
     from tests.conftest import REFERENCE_TOML
 
-    folder = tmp_path_factory.mktemp("recordings")
-    toml = folder / "er32_d16_53.5mm.toml"
-    toml.write_text(REFERENCE_TOML)
+    toml = folder / f"er32_d16_{stickout_mm:g}mm.toml"
+    toml.write_text(REFERENCE_TOML.replace("stickout = 53.5", f"stickout = {stickout_mm:g}"))
     assembly = load_assembly(toml)
-    modes = solve_modes(build_model(assembly), HolderParams(**HOLDER_A), n_modes=3)
+    params = HolderParams(**{**HOLDER_A, "k_tt": contact_factor * HOLDER_A["k_tt"],
+                             "k_rr": contact_factor * HOLDER_A["k_rr"]})
+    modes = solve_modes(build_model(assembly), params, n_modes=3)
     x = tap_sound(modes.frequency_hz[:3], modes.damping_ratio[:3], (1.0, 0.5, 0.35),
-                  onsets_s=(0.3, 1.0, 1.7, 2.4, 3.1), seconds=3.8)
-    wav = folder / "er32_d16_53.5mm.wav"
+                  onsets_s=(0.3, 1.0, 1.7, 2.4, 3.1), seconds=3.8, seed=seed)
+    wav = toml.with_suffix(".wav")
     soundfile.write(wav, x, FS, subtype="PCM_24")
     return wav, toml, tuple(float(f) for f in modes.frequency_hz[:3])
+
+
+@pytest.fixture(scope="session")
+def generated_recording(tmp_path_factory):
+    """A 5-tap WAV of the reference assembly (holder A) at 53.5 mm and its sidecar assembly file."""
+    return write_recording(tmp_path_factory.mktemp("recordings"), 53.5)
+
+
+@pytest.fixture(scope="session")
+def second_recording(tmp_path_factory):
+    """The same holder and tool tapped at 63.5 mm (another folder: its own sidecar file)."""
+    return write_recording(tmp_path_factory.mktemp("recordings2"), 63.5, seed=2)
 
 
 @pytest.fixture
@@ -71,6 +87,15 @@ def fast_identify_options():
                            polish_evaluations=60)
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _own_settings(tmp_path_factory):
+    """Every QSettings() of the tests lives in a temporary folder: the user's remembered
+    machine file is neither read nor overwritten."""
+    from PySide6.QtCore import QSettings
+
+    QSettings.setPath(QSettings.IniFormat, QSettings.UserScope, str(tmp_path_factory.mktemp("settings")))
+
+
 @pytest.fixture(autouse=True)
 def _clear_messages():
     from taptune.gui import messages
@@ -81,11 +106,19 @@ def _clear_messages():
 
 
 @pytest.fixture
-def window(qtbot, library_path, fast_identify_options):
+def settings(tmp_path):
+    """Settings in a temporary INI file (the user's own are never touched)."""
+    from PySide6.QtCore import QSettings
+
+    return QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat)
+
+
+@pytest.fixture
+def window(qtbot, library_path, fast_identify_options, settings):
     """The real main window at laptop size, with no audio device."""
     from taptune.gui.main_window import MainWindow
 
-    win = MainWindow(library_path, identify_options=fast_identify_options, devices=lambda: [])
+    win = MainWindow(library_path, identify_options=fast_identify_options, devices=lambda: [], settings=settings)
     qtbot.addWidget(win)
     win.resize(1366, 768)
     win.show()

@@ -25,7 +25,7 @@ def test_open_identify_save_and_predict(qtbot, window, generated_recording, libr
     _load(qtbot, window, wav)
     # The assembly file beside the recording was loaded into the panel.
     assert window.assembly_panel.assembly.holder.name == "ER32 collet chuck HSK-A63 x 100"
-    assert window.tabs.currentWidget() is window.spectrum
+    assert window.tabs.currentWidget() is window.spectrum_page
     bending = window.analysis.bending_hz
     np.testing.assert_allclose(bending, true_hz, rtol=1e-3)
     assert window.identify_button.isEnabled()
@@ -162,5 +162,16 @@ def test_library_holder_predicts_with_the_panel_tool(qtbot, window, library_path
     with qtbot.waitSignal(window.predictor.predicted, timeout=20000) as blocker:
         window.library_view.buttons["predict"].click()
     # MODEL.md §13.4: holder A at 53.5 mm, f1 = 4685.8 Hz.
-    assert blocker.args[0].bending_hz[0] == pytest.approx(4685.8, rel=5e-4)
+    prediction = blocker.args[0]
+    assert prediction.bending_hz[0] == pytest.approx(4685.8, rel=5e-4)
     assert window.tabs.currentWidget() is window.predictor
+    # How each ± was made: the components per mode, combined in quadrature, and the calibration.
+    band = prediction.band
+    view = window.predictor
+    assert not view.band_table.isHidden()
+    assert view.band_table.item(0, 1).text() == f"{band.half_width_hz[0]:,.0f} Hz"
+    assert view.table.item(0, 1).text().endswith(f"± {band.half_width_hz[0]:,.0f}")
+    assert band.half_width_hz[0] == pytest.approx(np.sqrt(band.set_hz[0] ** 2 + band.geometry_hz[0] ** 2
+                                                          + band.model_form_hz[0] ** 2), rel=1e-9)
+    assert view.band_table.item(0, 3).text() == f"{band.geometry_hz[0]:,.0f}"
+    assert f"Calibration: {band.calibration}" in view.band_note.text()

@@ -114,6 +114,14 @@ def test_gui_bad_input_is_one_line_exit_2(tmp_path, capsys):
     assert main(["gui", "--size", "big", "--screenshot", str(tmp_path / "x.png")]) == 2
     assert main(["gui", "--holder", "ER99", "--library", str(tmp_path / "empty.json")]) == 2
     assert "no holder 'ER99' in the library; the library is empty" in capsys.readouterr().err
+    bad_machine = tmp_path / "machine.toml"
+    bad_machine.write_text("[machine]\nname = 1\n")
+    assert main(["gui", "--machine", str(bad_machine), "--screenshot", str(tmp_path / "x.png")]) == 2
+    assert "machine.toml" in capsys.readouterr().err
+    assert main(["gui", "--second", str(tmp_path / "missing2.wav")]) == 2
+    assert "missing2.wav: no such file" in capsys.readouterr().err
+    assert main(["gui", "--check", "--screenshot", str(tmp_path / "x.png")]) == 2
+    assert "--check needs a recording (WAV) and --holder NAME" in capsys.readouterr().err
 
 
 def test_screenshot_of_the_predictor_for_a_library_holder(tmp_path, reference_toml, reference_assembly):

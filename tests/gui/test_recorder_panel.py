@@ -20,19 +20,19 @@ def _taps(onsets, seconds):
     return tap_sound((4686.0, 14937.0, 19897.0), (0.0039, 0.002, 0.0027), (1.0, 0.5, 0.35), onsets, seconds)
 
 
-def _window(qtbot, library_path, stream):
+def _window(qtbot, library_path, stream, settings):
     from taptune.gui.main_window import MainWindow
 
-    win = MainWindow(library_path, stream_factory=stream.factory, devices=lambda: DEVICES)
+    win = MainWindow(library_path, stream_factory=stream.factory, devices=lambda: DEVICES, settings=settings)
     qtbot.addWidget(win)
     win.resize(1366, 768)
     win.show()
     return win
 
 
-def test_record_taps_saves_wav_and_assembly_then_analyses(qtbot, library_path, tmp_path, reference_assembly):
+def test_record_taps_saves_wav_and_assembly_then_analyses(qtbot, library_path, settings, tmp_path, reference_assembly):
     stream = FakeInputStream(_taps((0.4, 1.2, 2.0, 2.8), 3.6))
-    win = _window(qtbot, library_path, stream)
+    win = _window(qtbot, library_path, stream, settings)
     panel = win.recorder
     assert panel.device_combo.currentText().startswith("2: Fake USB microphone")
     win.assembly_panel.set_assembly(reference_assembly)
@@ -57,9 +57,9 @@ def test_record_taps_saves_wav_and_assembly_then_analyses(qtbot, library_path, t
     win.close()
 
 
-def test_device_lost_mid_recording_keeps_the_taps_and_says_so(qtbot, library_path, tmp_path):
+def test_device_lost_mid_recording_keeps_the_taps_and_says_so(qtbot, library_path, settings, tmp_path):
     stream = FakeInputStream(_taps((0.4,), 1.5), end="lost")
-    win = _window(qtbot, library_path, stream)
+    win = _window(qtbot, library_path, stream, settings)
     panel = win.recorder
     panel.folder.setText(str(tmp_path))
     panel.taps.setValue(3)
@@ -73,9 +73,9 @@ def test_device_lost_mid_recording_keeps_the_taps_and_says_so(qtbot, library_pat
     win.close()
 
 
-def test_stop_before_any_tap_writes_nothing(qtbot, library_path, tmp_path):
+def test_stop_before_any_tap_writes_nothing(qtbot, library_path, settings, tmp_path):
     stream = FakeInputStream(_taps((), 0.5) * 0)  # silence, then the stream stays open
-    win = _window(qtbot, library_path, stream)
+    win = _window(qtbot, library_path, stream, settings)
     panel = win.recorder
     panel.folder.setText(str(tmp_path))
     panel.arm()
@@ -108,4 +108,30 @@ def test_without_portaudio_the_panel_says_so(qtbot, library_path):
     assert "PortAudio library was not found" in win.recorder.state.text()
     win.recorder.arm()  # nothing happens, nothing breaks
     assert not win.recorder.recording
+    win.close()
+
+
+def test_record_the_second_stickout(qtbot, library_path, settings, tmp_path, generated_recording):
+    # The same holder and tool at 63.5 mm (MODEL.md §13.4 holder A: f1 3,748.6 Hz).
+    stream = FakeInputStream(tap_sound((3748.6, 13125.9, 17768.6), (0.0037, 0.0023, 0.0019), (1.0, 0.5, 0.35),
+                                       (0.4, 1.2, 2.0, 2.8), 3.6))
+    win = _window(qtbot, library_path, stream, settings)
+    with qtbot.waitSignal(win.analysis_ready, timeout=30000):
+        win.load_recording(str(generated_recording[0]))
+    win.assembly_panel.set_second_stickout_mm(63.5)
+    win.record_second.setChecked(True)
+    panel = win.recorder
+    panel.folder.setText(str(tmp_path / "second"))
+    panel.taps.setValue(3)
+    with qtbot.waitSignal(win.analysis_ready, timeout=30000):
+        with qtbot.waitSignal(panel.recorded, timeout=10000) as recorded:
+            panel.arm_button.click()
+    wav = recorded.args[0]
+    assert "_63.5mm_" in wav  # named after the 2nd stick-out, and its assembly file says so
+    assert "stickout = 63.5" in (tmp_path / "second" / (wav.rsplit("/", 1)[1][:-4] + ".toml")).read_text()
+    assert win.second is not None and win.second.path == wav
+    assert win.second.assembly.stickout == 0.0635 and win.recording_path == str(generated_recording[0])
+    assert abs(win.second.analysis.bending_hz[0] / 3748.6 - 1) < 2e-3
+    assert win.identify_button.text() == "Identify both together" and win.identify_button.isEnabled()
+    assert messages.history == []
     win.close()

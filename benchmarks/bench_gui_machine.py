@@ -1,0 +1,78 @@
+"""Machine view: time of one stick-out slider move — tool-point FRF + lobes + redraw.
+
+The Machine view (offscreen Qt) with the example machine (recordings/machine), holder A
+of MODEL.md §13.4 and the reference tool, the default cut (4 teeth, Ø16, ae 4 mm down,
+al7075, 2,000–24,000 rpm). Each move to a stick-out from 45 to 65 mm is timed in its three
+parts on the GUI thread, as the worker and the view run them one after the other:
+``compute_machine`` (toolpoint_frf and stability_lobes), then ``draw`` and the event
+loop's one render of the canvas (its ``draw_idle``): what a screen update costs.
+
+    OPENBLAS_NUM_THREADS=1 QT_QPA_PLATFORM=offscreen python benchmarks/bench_gui_machine.py [--moves 21]
+
+CPU seconds (``time.process_time``) do not move much with other load on the machine;
+wall seconds do (the load average is printed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--moves", type=int, default=21, help="slider moves, spread over 45–65 mm")
+    args = parser.parse_args()
+
+    import numpy as np
+    from PySide6.QtCore import QSettings
+    from PySide6.QtWidgets import QApplication
+
+    from taptune.gui.machine_view import MachineView, compute_machine
+    from taptune.gui.predictor import PredictorSource
+    from taptune.io.assembly import load_assembly
+    from taptune.model.params import HolderParams
+
+    app = QApplication.instance() or QApplication([])
+    settings = QSettings(str(Path(os.environ.get("TMPDIR", "/tmp")) / "bench_gui_machine.ini"), QSettings.IniFormat)
+    view = MachineView(settings)
+    view.resize(950, 560)
+    view.show()
+    view.load_machine(str(REPO / "recordings" / "machine" / "machine.toml"), remember=False)
+    assembly = load_assembly(REPO / "recordings" / "er32_d16.toml")
+    holder_a = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.0)
+    source = PredictorSource("holder A (MODEL.md §13.4)", (holder_a,), assembly)
+    view.set_source(source)
+    view.shutdown()  # the timed moves run here, one after the other, not in the worker
+    cut = view.cut()
+    compute_machine(source, view.machine, 50.0, cut)  # imports and first-call costs, not timed
+
+    rows = []
+    load = os.getloadavg()[0]
+    for stickout_mm in np.linspace(45.0, 65.0, args.moves):
+        c0, w0 = time.process_time(), time.perf_counter()
+        result = compute_machine(source, view.machine, float(stickout_mm), cut)
+        c1, w1 = time.process_time(), time.perf_counter()
+        view.draw(*result)  # new data, then draw_idle: the render runs in the event loop, once
+        app.processEvents()
+        c2, w2 = time.process_time(), time.perf_counter()
+        rows.append((c1 - c0, c2 - c1, c2 - c0, w2 - w0))
+    rows = np.array(rows)
+    print(f"{args.moves} slider moves, 45–65 mm; FRF {len(result[1].freq_hz)} frequencies, "
+          f"lobes {len(result[2].rpm)} speeds; load average {load:.1f} on {os.cpu_count()} cores")
+    print(f"{'per move':>22} {'median':>8} {'max':>8}")
+    for name, col in (("FRF + lobes CPU s", 0), ("redraw CPU s", 1), ("total CPU s", 2), ("total wall s", 3)):
+        print(f"{name:>22} {np.median(rows[:, col]):8.3f} {rows[:, col].max():8.3f}")
+    view.close()
+
+
+if __name__ == "__main__":
+    main()

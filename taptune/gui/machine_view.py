@@ -1,0 +1,423 @@
+"""Machine view: the holder on a machine — tool-point FRF in x and y and the stability lobes, at any stick-out.
+
+The holder parameters are the predictor's (identified now or from the library), with the
+panel's tool; the machine is a machine file (MACHINE.md) chosen once and remembered. Each
+update calls :func:`taptune.machine.toolpoint_frf` and :func:`taptune.machine.stability_lobes`
+— what ``taptune toolpoint`` and ``taptune lobes`` call — in a worker thread; while one runs
+only the latest request waits (:class:`~taptune.gui.latest.LatestOnly`).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QGridLayout,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
+)
+
+from taptune.gui.latest import LatestOnly
+from taptune.gui.messages import show_error
+from taptune.gui.plotting import MEASURED, MODEL, PlotCanvas
+from taptune.gui.signals import emit
+from taptune.gui.stickout import StickoutSlider
+
+MM = 1e-3
+SETTINGS_KEY = "machine/file"
+# The FRF grid: the CLI's band (the spindle files' range within 50 Hz–20 kHz) on a 5 Hz
+# step instead of 2 Hz. stability_lobes refines near the peaks; on the example machine
+# and holder (recordings/machine, er32_d16) the boundary moves by 0.004 % (median) and
+# 0.16 % (95th percentile) from the 2 Hz grid, and the update takes 2/3 of the time.
+FRF_STEP_HZ = 5.0
+RPM_STEP = 10.0
+# Below ~2,000 rpm a milling tool's lobes are hundreds of thin ones (k up to 60 f / (N n));
+# the default diagram starts there, the user can go lower.
+DEFAULT_RPM_MIN = 2000.0
+DEFAULT_RPM_MAX = 24000.0
+CUSTOM = "custom K_tc, K_rc"
+STABLE = "#d5ecd4"
+
+
+@dataclass(frozen=True)
+class Cut:
+    """The milling cut the lobes are for (mm, MPa, rpm: as typed)."""
+
+    teeth: int
+    diameter_mm: float
+    ae_mm: float
+    milling: str
+    ktc_mpa: float
+    krc_mpa: float
+    rpm_min: float
+    rpm_max: float
+
+
+def frf_grid(machine) -> np.ndarray:
+    """Frequencies of the tool-point FRF [Hz]: the spindle files' band within the CLI's limits."""
+    from taptune.cli.cmd_toolpoint import DEFAULT_F_MAX_HZ, DEFAULT_F_MIN_HZ
+    from taptune.library.exchange import frequency_grid
+
+    lo = max(float(machine.x.freq_hz[0]), float(machine.y.freq_hz[0]), DEFAULT_F_MIN_HZ)
+    hi = min(float(machine.x.freq_hz[-1]), float(machine.y.freq_hz[-1]), DEFAULT_F_MAX_HZ)
+    return frequency_grid(FRF_STEP_HZ * np.ceil(lo / FRF_STEP_HZ), hi, FRF_STEP_HZ)
+
+
+def compute_machine(source, machine, stickout_mm: float, cut: Cut, freq_hz=None):
+    """``(stickout_mm, ToolpointFRF, Lobes)`` of the holder and tool of ``source`` on ``machine`` (worker)."""
+    from taptune.errors import InputError
+    from taptune.library.exchange import frequency_grid
+    from taptune.machine import stability_lobes, toolpoint_frf
+
+    if not cut.rpm_min < cut.rpm_max:
+        raise InputError(f"speed range {cut.rpm_min:g}–{cut.rpm_max:g} rpm: the first must be below the second")
+    assembly = source.assembly.with_stickout(stickout_mm * MM)
+    freq = frf_grid(machine) if freq_hz is None else freq_hz
+    frf = toolpoint_frf(assembly, source.param_sets[0], {"x": machine.x, "y": machine.y}, freq, source.model_options)
+    lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
+                            krc=cut.krc_mpa * 1e6, diameter=cut.diameter_mm * MM, ae=cut.ae_mm * MM,
+                            milling=cut.milling, rpm=frequency_grid(cut.rpm_min, cut.rpm_max, RPM_STEP))
+    return stickout_mm, frf, lobes
+
+
+def tool_teeth(name: str) -> int | None:
+    """Number of teeth written in a tool's name ("D16 4FL", "3-flute", "Z4"), or None."""
+    m = re.search(r"(\d+)\s*-?\s*(?:FL\b|flutes?\b|teeth\b|T\b)|\bZ\s*(\d+)\b", name, re.IGNORECASE)
+    return int(m.group(1) or m.group(2)) if m else None
+
+
+def tool_diameter_mm(tool) -> float:
+    """Cutting diameter of a tool [mm]: the flute diameter, else the last segment's (as ``taptune lobes``)."""
+    return (tool.flute_diameter or tool.segments[-1].od) / MM
+
+
+def _spin(lo, hi, decimals, suffix, value) -> QDoubleSpinBox:
+    box = QDoubleSpinBox()
+    box.setRange(lo, hi)
+    box.setDecimals(decimals)
+    box.setSuffix(suffix)
+    box.setValue(value)
+    box.setKeyboardTracking(False)
+    return box
+
+
+class MachineView(QWidget):
+    """Tool-point FRF and stability lobes of the current holder, tool and stick-out on a machine.
+
+    Parameters
+    ----------
+    settings : QSettings, optional
+        Where the machine file is remembered (default: the user's taptune settings).
+
+    Signals
+    -------
+    updated(object)
+        ``(stickout_mm, ToolpointFRF, Lobes)`` just drawn.
+    failed(str)
+        An update could not be computed (the message is also shown in the view).
+    """
+
+    updated = Signal(object)
+    failed = Signal(str)
+
+    def __init__(self, settings=None, parent=None):
+        super().__init__(parent)
+        from PySide6.QtCore import QSettings
+
+        from taptune.machine.materials import MATERIALS
+
+        self.settings = settings if settings is not None else QSettings()
+        self.source = None
+        self.machine = None
+        self.result = None
+        self._artists = None  # the plot's axes and lines, made on the first draw
+        self._updates = LatestOnly(self._show, self._failed, self)
+
+        self.machine_label = QLabel()
+        self.machine_label.setWordWrap(True)
+        self.machine_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        self.choose_button = QPushButton("Choose machine file…")
+        self.choose_button.clicked.connect(self._choose_dialog)
+        top = QHBoxLayout()
+        top.addWidget(self.machine_label, 1)
+        top.addWidget(self.choose_button)
+
+        # The cut: one compact grid, labels above the fields.
+        self.teeth = QSpinBox()
+        self.teeth.setRange(1, 24)
+        self.teeth.setValue(4)
+        self.teeth.setKeyboardTracking(False)
+        self.diameter = _spin(0.5, 200.0, 2, " mm", 16.0)
+        self.ae = _spin(0.01, 200.0, 2, " mm", 4.0)
+        self.ae.setToolTip("Radial depth of cut; equal to the diameter is slotting")
+        self.milling = QComboBox()
+        self.milling.addItems(["down", "up"])
+        self.material = QComboBox()
+        self._materials = dict(MATERIALS)
+        self.material.addItems(list(self._materials) + [CUSTOM])
+        self.ktc = _spin(1.0, 20000.0, 0, " MPa", 796.0)
+        self.krc = _spin(0.0, 20000.0, 0, " MPa", 169.0)
+        self.rpm_min = _spin(10.0, 200000.0, 0, " rpm", DEFAULT_RPM_MIN)
+        self.rpm_max = _spin(100.0, 200000.0, 0, " rpm", DEFAULT_RPM_MAX)
+        for box in (self.rpm_min, self.rpm_max):
+            box.setSingleStep(500.0)
+        cut = QGridLayout()
+        cut.setHorizontalSpacing(8)
+        cut.setVerticalSpacing(1)
+        fields = (("Teeth", self.teeth), ("Tool Ø", self.diameter), ("ae", self.ae), ("Milling", self.milling),
+                  ("Material", self.material), ("K_tc", self.ktc), ("K_rc", self.krc),
+                  ("Speeds from", self.rpm_min), ("to", self.rpm_max))
+        for c, (label, widget) in enumerate(fields):
+            cut.addWidget(QLabel(label), 0, c)
+            cut.addWidget(widget, 1, c)
+        self.teeth.valueChanged.connect(self.request)
+        for box in (self.diameter, self.ae, self.ktc, self.krc, self.rpm_min, self.rpm_max):
+            box.valueChanged.connect(self.request)
+        self.milling.currentTextChanged.connect(self.request)
+        self.material.currentTextChanged.connect(self._material_changed)
+
+        self.stickout = StickoutSlider()
+        self.stickout.changed.connect(self.request)
+        self.slider, self.spin = self.stickout.slider, self.stickout.spin
+
+        self.summary = QLabel()
+        self.summary.setWordWrap(True)
+        self.summary.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        # Fixed margins instead of the constrained layout: that would be solved again on
+        # every render, which costs more than the plots themselves.
+        self.canvas = PlotCanvas(self, layout=None)
+
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addLayout(top)
+        layout.addLayout(cut)
+        layout.addWidget(self.stickout)
+        layout.addWidget(self.summary)
+        layout.addWidget(self.canvas, 1)
+        self._material_changed(self.material.currentText())
+
+        remembered = self.settings.value(SETTINGS_KEY, "")
+        if remembered:
+            self.load_machine(str(remembered), remember=False, quiet=True)
+        self._update_state()
+
+    # ------------------------------------------------------------------ inputs
+
+    def cut(self) -> Cut:
+        return Cut(self.teeth.value(), self.diameter.value(), self.ae.value(), self.milling.currentText(),
+                   self.ktc.value(), self.krc.value(), self.rpm_min.value(), self.rpm_max.value())
+
+    def _material_changed(self, name: str) -> None:
+        custom = name == CUSTOM
+        for box in (self.ktc, self.krc):
+            box.setEnabled(custom)
+        if not custom:
+            c = self._materials[name]
+            for box, value in ((self.ktc, c.ktc), (self.krc, c.krc)):
+                box.blockSignals(True)
+                box.setValue(value / 1e6)
+                box.blockSignals(False)
+            self.material.setToolTip(c.source)
+        self.request()
+
+    def set_source(self, source) -> None:
+        """The holder parameters and assembly (a :class:`~taptune.gui.predictor.PredictorSource`, or None)."""
+        previous = self.source
+        self.source = source
+        if source is None:
+            self._update_state()
+            return
+        tool = source.assembly.tool
+        if previous is None or previous.assembly.tool != tool:
+            # A new tool brings its diameter, teeth (from its name) and a quarter-diameter cut.
+            d = tool_diameter_mm(tool)
+            for box, value in ((self.diameter, d), (self.ae, round(d / 4, 2)),
+                               (self.teeth, tool_teeth(tool.name) or self.teeth.value())):
+                box.blockSignals(True)
+                box.setValue(value)
+                box.blockSignals(False)
+        self.stickout.set_assembly(source.assembly)
+        self._update_state()
+        self.request()
+
+    def set_stickout_mm(self, value: float) -> None:
+        """Move the stick-out (as the user would with the field)."""
+        self.stickout.set_value(value)
+
+    # ------------------------------------------------------------------ the machine file
+
+    def _choose_dialog(self) -> None:
+        start = str(Path(self.machine.source).parent) if self.machine else str(Path.cwd() / "recordings" / "machine")
+        path, _ = QFileDialog.getOpenFileName(self, "Choose a machine file", start, "Machine files (*.toml)")
+        if path:
+            self.load_machine(path)
+
+    def load_machine(self, path: str, remember: bool = True, quiet: bool = False) -> bool:
+        """Use the machine file ``path`` (and remember it); a bad file changes nothing and says why.
+
+        ``quiet`` reports a problem in the view only (the remembered file at start-up).
+        """
+        from taptune.errors import InputError
+        from taptune.io.machine import load_machine
+
+        try:
+            machine = load_machine(path)
+        except InputError as err:
+            keep = f"The machine in use is unchanged ({self.machine.name})." if self.machine else ""
+            if not quiet:
+                show_error(self, "Cannot use this machine file", f"{err}\n{keep}".strip())
+            self._set_label(f"Cannot use {path}: {err}" + (f" — still using {self.machine.name}" if self.machine
+                                                          else ""), error=True)
+            return False
+        self.machine = machine
+        if remember:
+            self.settings.setValue(SETTINGS_KEY, str(Path(path).resolve()))
+        if machine.max_rpm:
+            self.rpm_max.blockSignals(True)
+            self.rpm_max.setValue(machine.max_rpm)
+            self.rpm_max.blockSignals(False)
+        self._update_state()
+        self.request()
+        return True
+
+    def _set_label(self, text: str, error: bool = False) -> None:
+        self.machine_label.setText(text)
+        self.machine_label.setStyleSheet("color: #b00020;" if error else "")
+
+    def _update_state(self) -> None:
+        if self.machine is not None:
+            note = "; y uses the x receptance" if self.machine.y_from_x else ""
+            self._set_label(f"<b>Machine:</b> {self.machine.name} ({self.machine.interface}) — "
+                            f"{Path(self.machine.source).name}{note}")
+        elif not self.machine_label.text():
+            self._set_label("Choose the machine file of the spindle (MACHINE.md): it is remembered for next time.")
+        ready = self.machine is not None and self.source is not None
+        self.stickout.setEnabled(ready)
+        if not ready and self.result is None:
+            missing = [w for w, ok in (("a machine file", self.machine is not None),
+                                       ("holder parameters (identify, or pick a library holder)",
+                                        self.source is not None)) if not ok]
+            self._artists = None
+            self.canvas.message("Needs " + " and ".join(missing) + ".")
+
+    # ------------------------------------------------------------------ updates
+
+    @property
+    def busy(self) -> bool:
+        return self._updates.busy
+
+    def request(self, *_args) -> None:
+        """Compute the FRF and lobes at the current stick-out and cut (latest request wins)."""
+        if self.machine is not None and self.source is not None:
+            self._updates.request(compute_machine, self.source, self.machine, self.spin.value(), self.cut())
+
+    def _failed(self, message: str) -> None:
+        self.result = None
+        self._artists = None
+        self.summary.setText("")
+        self.canvas.message(f"Cannot compute the tool point here:\n{message}")
+        emit(self.failed, message)
+
+    def _show(self, result) -> None:
+        self.result = result
+        stickout_mm, frf, lobes = result
+        self.summary.setText(summary_text(self.source, frf, lobes))
+        self.draw(stickout_mm, frf, lobes)
+        emit(self.updated, result)
+
+    def draw(self, stickout_mm: float, frf, lobes) -> None:
+        """The FRF (left) and the lobe diagram (right).
+
+        The axes and artists are made once and then given new data: a slider move then
+        costs one render, not a new figure and a new layout (MachineView's 0.2 s budget).
+        """
+        if self._artists is None:
+            self._make_axes()
+        art = self._artists
+        f_khz = frf.freq_hz / 1e3
+        gx, gy = np.abs(frf.xx) * 1e6, np.abs(frf.yy) * 1e6
+        art["x"].set_data(f_khz, gx)
+        art["y"].set_data(f_khz, gy)
+        # The strongest peak only: x and y peaks a few Hz apart would print on top of each other.
+        mode = frf.modes[0] if frf.modes else None
+        art["mode"].set_visible(mode is not None)
+        if mode is not None:
+            art["mode"].xy = (mode.hz / 1e3, mode.magnitude * 1e6)
+            art["mode"].set_text(f"{mode.hz:,.0f} Hz ({mode.direction})")
+        art["ax_f"].set_xlim(f_khz[0], f_khz[-1])
+        art["ax_f"].set_ylim(0, 1.15 * max(gx.max(), gy.max()))
+        art["ax_f"].set_title(f"Tool-point FRF at {stickout_mm:.1f} mm", loc="left")
+
+        ax_l = art["ax_l"]
+        a_mm = np.where(np.isfinite(lobes.a_lim), lobes.a_lim / MM, np.nan)
+        if art["stable"] is not None:
+            art["stable"].remove()
+        art["stable"] = ax_l.fill_between(lobes.rpm, 0, a_mm, color=STABLE, lw=0, zorder=0)
+        art["boundary"].set_data(lobes.rpm, a_mm)
+        a_crit = lobes.a_crit / MM
+        art["crit"].set_ydata([a_crit, a_crit])
+        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit:.2g} mm")
+        best = lobes.pockets[0] if lobes.pockets else None
+        art["pocket"].set_visible(best is not None)
+        art["pocket_note"].set_visible(best is not None)
+        if best is not None:
+            rpm, a = best[0], best[1] / MM
+            art["pocket"].set_data([rpm], [a])
+            art["pocket_note"].xy = (rpm, a)
+            art["pocket_note"].set_text(f"{rpm:,.0f} rpm\n{a:.2g} mm")
+        top = max(a / MM for _, a in lobes.pockets) if lobes.pockets else 4 * a_crit
+        ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit))
+        ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
+        self.canvas.draw_idle()
+
+    def _make_axes(self) -> None:
+        fig = self.canvas.figure
+        fig.clear()
+        fig.subplots_adjust(left=0.065, right=0.99, bottom=0.11, top=0.92, wspace=0.2)
+        with self.canvas.styled():
+            ax_f, ax_l = fig.subplots(1, 2, width_ratios=(2, 3))
+            x, = ax_f.plot([], [], color=MEASURED, lw=1.1, label="x")
+            y, = ax_f.plot([], [], color=MODEL, lw=1.0, ls="--", label="y")
+            mode = ax_f.annotate("", (0, 0), xytext=(5, -3), textcoords="offset points", fontsize=8,
+                                 color="#333333")
+            ax_f.set_xlabel("frequency [kHz]")
+            ax_f.set_ylabel("|G| at the tool point [µm/N]")
+            ax_f.legend(loc="upper right", framealpha=0.9)
+            boundary, = ax_l.plot([], [], color=MEASURED, lw=1.0, label="stability limit")
+            crit = ax_l.axhline(0.0, color=MODEL, lw=0.9, ls="--", label="stable at any speed")
+            pocket, = ax_l.plot([], [], "v", color=MODEL, ms=7)
+            pocket_note = ax_l.annotate("", (0, 0), xytext=(0, 8), textcoords="offset points", ha="center",
+                                        va="bottom", fontsize=8, color=MODEL)
+            ax_l.set_xlabel("spindle speed [rpm]")
+            ax_l.set_ylabel("axial depth of cut [mm]")
+            ax_l.set_title("Stability lobes (zero-order): stable below the line", loc="left")
+            legend = ax_l.legend(loc="upper left", framealpha=0.9)
+        self._artists = dict(ax_f=ax_f, ax_l=ax_l, x=x, y=y, mode=mode, boundary=boundary, crit=crit,
+                             pocket=pocket, pocket_note=pocket_note, legend=legend, stable=None)
+
+    def shutdown(self) -> None:
+        self._updates.shutdown()
+
+
+def summary_text(source, frf, lobes) -> str:
+    """One line a machinist reads first: the safe depth, the best speeds, the mode that limits."""
+    a_crit = lobes.a_crit / MM
+    pockets = ", ".join(f"{rpm:,.0f} rpm → {a / MM:.2g} mm" for rpm, a in lobes.pockets[:3])
+    mode = frf.modes[0] if frf.modes else None
+    limit = (f"; weakest tool-point mode {mode.hz:,.0f} Hz ({mode.direction}), ζ {100 * mode.damping_ratio:.1f} %"
+             if mode else "")
+    return (f"<b>{source.assembly.holder.name}</b> with {source.assembly.tool.name} "
+            f"(holder parameters: {source.label}). "
+            f"<b>Stable at every speed up to {a_crit:.2g} mm</b>; best speeds: {pockets or 'none in this range'}"
+            f"{limit}.")

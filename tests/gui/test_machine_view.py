@@ -1,0 +1,132 @@
+"""The Machine view: tool-point FRF and lobes of a library holder, the stick-out slider, the machine file.
+
+The machine is the bundled synthetic example (recordings/machine); the holder is holder A
+of MODEL.md §13.4 with its published parameters (no identification needed).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from taptune.gui import messages
+
+MACHINE = Path(__file__).resolve().parents[2] / "recordings" / "machine" / "machine.toml"
+
+
+@pytest.fixture
+def holder_a(library_path, reference_assembly):
+    from taptune.library import HolderEntry, HolderLibrary
+    from taptune.model.params import HolderParams
+
+    from tests.gui.conftest import HOLDER_A
+
+    entry = HolderEntry.create(reference_assembly.holder, HolderParams(**HOLDER_A))
+    HolderLibrary(library_path).put(entry)
+    return HolderLibrary(library_path).get(entry.name)
+
+
+def _show_on_machine(qtbot, window, reference_assembly):
+    window.library_view.refresh()
+    window.assembly_panel.set_assembly(reference_assembly)
+    assert window.machine.load_machine(str(MACHINE))
+    with qtbot.waitSignal(window.machine.updated, timeout=30000) as blocker:
+        window.library_view.buttons["machine"].click()
+    return blocker.args[0]
+
+
+def test_machine_view_draws_the_frf_and_lobes_as_the_cli_computes_them(qtbot, window, holder_a, reference_assembly,
+                                                                     library_path, tmp_path, capsys):
+    from taptune.cli import main
+
+    stickout_mm, frf, lobes = _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    assert window.tabs.currentWidget() is view
+    assert stickout_mm == pytest.approx(53.5)
+    ax_f, ax_l = view.canvas.figure.axes
+    assert len(ax_f.lines) >= 2 and ax_l.collections  # |G| in x and y; the stable region
+    # The tool's diameter and teeth came from the tool ("D16 4FL"), the cut is a quarter of it.
+    assert (view.diameter.value(), view.teeth.value(), view.ae.value()) == (16.0, 4, 4.0)
+    assert "Stable at every speed up to" in view.summary.text()
+
+    # The CLI (2 Hz grid, 10 rpm steps) gives the same lobes to within the grid's effect.
+    out = tmp_path / "lobes.json"
+    c = view.cut()
+    status = main(["lobes", str(MACHINE.parents[1] / "er32_d16.toml"), "--holder", holder_a.name,
+                   "--library", str(library_path), "--machine", str(MACHINE), "--teeth", str(c.teeth),
+                   "--ktc", f"{c.ktc_mpa:g}", "--krc", f"{c.krc_mpa:g}", "--ae", f"{c.ae_mm:g}", "--milling",
+                   c.milling, "--rpm", f"{c.rpm_min:g}", f"{c.rpm_max:g}", "10", "--json", str(out)])
+    capsys.readouterr()
+    assert status == 0
+    cli = json.loads(out.read_text())
+    assert lobes.a_crit * 1e3 == pytest.approx(cli["a_crit_mm"], rel=2e-3)
+    a_cli = np.array([np.inf if a is None else a for a in cli["a_lim_mm"]])
+    np.testing.assert_allclose(np.interp(cli["rpm"], lobes.rpm, lobes.a_lim * 1e3), a_cli, rtol=0.02)
+
+
+def test_the_slider_updates_frf_and_lobes(qtbot, window, holder_a, reference_assembly):
+    _stickout, frf, lobes = _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    with qtbot.waitSignal(view.updated, timeout=30000) as blocker:
+        view.slider.setValue(635)  # 10 mm longer
+    stickout_mm, frf_long, lobes_long = blocker.args[0]
+    assert stickout_mm == pytest.approx(63.5) and view.spin.value() == pytest.approx(63.5)
+    # A longer tool is more flexible: a larger tool-point peak and a smaller safe depth.
+    assert np.abs(frf_long.xx).max() > 1.2 * np.abs(frf.xx).max()
+    assert lobes_long.a_crit < 0.9 * lobes.a_crit
+    assert "63.5 mm" in view.canvas.figure.axes[0].get_title(loc="left")
+    # A burst of moves (a drag) ends on the last one, without queueing the others.
+    with qtbot.waitSignal(view.updated, timeout=30000):
+        for value in range(540, 601, 5):
+            view.slider.setValue(value)
+    qtbot.waitUntil(lambda: not view.busy, timeout=30000)
+    assert view.result[0] == pytest.approx(60.0)
+
+
+def test_a_bad_machine_file_changes_nothing(qtbot, window, holder_a, reference_assembly, tmp_path, settings):
+    _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    before = (view.machine, view.result, settings.value("machine/file"))
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[machine]\nname = "broken"\ninterface = "HSK-A63"\n[spindle]\nx = "missing.csv"\n')
+    assert not view.load_machine(str(bad))
+    title, text = messages.history[-1]
+    assert title == "Cannot use this machine file" and "missing.csv" in text and "unchanged" in text
+    assert (view.machine, view.result, settings.value("machine/file")) == before
+    assert "bad.toml" in view.machine_label.text()
+
+
+def test_the_machine_file_is_remembered(qtbot, settings):
+    from taptune.gui.machine_view import MachineView
+
+    first = MachineView(settings)
+    qtbot.addWidget(first)
+    assert first.load_machine(str(MACHINE))
+    again = MachineView(settings)
+    qtbot.addWidget(again)
+    assert again.machine is not None and again.machine.name == first.machine.name
+    assert again.rpm_max.value() == 24000
+
+
+def test_teeth_from_tool_names():
+    from taptune.gui.machine_view import tool_teeth
+
+    assert tool_teeth("solid carbide end mill D16 4FL") == 4
+    assert tool_teeth("3-flute roughing") == 3
+    assert tool_teeth("HSS Z2 slot drill") == 2
+    assert tool_teeth("end mill D16") is None
+
+
+def test_screenshot_of_the_machine_view(holder_a, library_path, tmp_path, reference_toml):
+    from PySide6.QtGui import QImage
+
+    from taptune.cli import main
+
+    png = tmp_path / "machine.png"
+    assert main(["gui", "--assembly", str(reference_toml), "--holder", holder_a.name, "--library", str(library_path),
+                 "--machine", str(MACHINE), "--view", "machine", "--screenshot", str(png)]) == 0
+    image = QImage(str(png))
+    assert (image.width(), image.height()) == (1366, 768)
