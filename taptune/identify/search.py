@@ -37,7 +37,8 @@ STATE: dict = {}
 
 @dataclass(frozen=True)
 class RunResult:
-    """One task's outcome: its best point and the archive points near it."""
+    """One task's outcome: its best point and the archive points near it (with their
+    summed terms, ``archive_terms`` (k, 2), so the near-optimal set need not re-evaluate them)."""
 
     u: np.ndarray
     value: float
@@ -45,6 +46,20 @@ class RunResult:
     archive_u: np.ndarray
     archive_f: np.ndarray
     cancelled: bool = False
+    archive_terms: np.ndarray | None = None
+
+
+def _with_terms(objective: Objective, au: np.ndarray) -> np.ndarray:
+    """The remembered summed terms of archive points (all were evaluated by this task's objective)."""
+    return np.array([objective.summed_terms(unit_to_p(u)) for u in au]).reshape(len(au), 2)
+
+
+def remember(objective: Objective, results: list[RunResult]) -> None:
+    """Put the terms that tasks computed (maybe in other processes) into the objective's memo."""
+    for r in results:
+        if r.archive_terms is not None:
+            for u, t in zip(r.archive_u, r.archive_terms):
+                objective.memo.setdefault(unit_to_p(u).tobytes(), t)
 
 
 def n_modes(objective: Objective) -> int:
@@ -113,7 +128,8 @@ def ga_task(index: int) -> RunResult:
     au, af = archive.arrays()
     # Polish starts and the near-optimal set come from the neighbourhood of the optimum only.
     keep = af <= ga.value + options.polish_band + near_band(ga.value, options, n_modes(objective))
-    return RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep])
+    return RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep],
+                     archive_terms=_with_terms(objective, au[keep]))
 
 
 def polish_task(u0: np.ndarray) -> RunResult:
@@ -128,7 +144,8 @@ def polish_task(u0: np.ndarray) -> RunResult:
         u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
     au, af = archive.arrays()
     keep = af <= value + near_band(value, options, n_modes(objective))
-    return RunResult(u, value, objective.evaluations - start, au[keep], af[keep])
+    return RunResult(u, value, objective.evaluations - start, au[keep], af[keep],
+                     archive_terms=_with_terms(objective, au[keep]))
 
 
 def extreme_task(args) -> RunResult:
@@ -363,10 +380,11 @@ def near_optimal_set(objective: Objective, workers: Workers, results: list[RunRe
     pool = af <= j_min + near_band(j_min, options, modes)
     pick = select_diverse(au[pool], af[pool], options.near_candidates)
     cand_u, cand_f = au[pool][pick], af[pool][pick]
+    remember(objective, results)
+    evaluations = sum(not objective.known(unit_to_p(u)) for u in np.vstack([best.u, cand_u]))
     f_best, s_best = summed_terms(objective, unit_to_p, best.u)
     limits = SetLimits(f_best + modes * options.near_frequency, options.near_shape_factor * s_best + options.near_shape_abs)
     terms = np.array([summed_terms(objective, unit_to_p, u) for u in cand_u])
-    evaluations = len(cand_u) + 1
     ok = (terms[:, 0] <= limits.frequency) & (terms[:, 1] <= limits.shape)
     members, values = np.vstack([best.u, cand_u[ok]]), np.concatenate([[-np.inf], cand_f[ok]])
     if options.extreme_axes:
