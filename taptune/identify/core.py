@@ -206,9 +206,9 @@ def identify(
 
     say(0.0, "building the model")
     if evaluator_factory is None:
-        from taptune.model.reduced import FastEvaluator
+        from taptune.model.reduced import cached_evaluator
 
-        evaluator_factory = FastEvaluator
+        evaluator_factory = cached_evaluator  # the app identifies one assembly again and again
     evaluators = [evaluator_factory(asm, model_options) for asm in assemblies]
     objective = Objective(targets, evaluators, options.objective)
 
