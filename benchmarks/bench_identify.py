@@ -8,12 +8,16 @@ with the truth. Per case it prints the model evaluations, the wall time, the CPU
 truths lie inside the reported ± band and the band's mean half-width (the near-optimal
 set's spread). The load average is printed with the wall times: the machine may be shared.
 
-Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile]``.
+With ``--app`` it times instead, in the offscreen app, the click on Identify to the fitted
+view: with one process, then with the app's warm process pool.
+
+Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile] [--app]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import resource
@@ -54,13 +58,63 @@ def cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
+def app_figures(n_cases: int | None = None, jobs_list=(1, None)) -> None:
+    """Click-to-fitted-view wall time in the (offscreen) app: one process, then the warm pool.
+
+    Per case the first identification builds the evaluator; the second, as after the next
+    tap on the same assembly, reuses it.
+    """
+    os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    from PySide6.QtCore import QEventLoop, QTimer
+
+    from taptune.gui.app import application, start_process_pool, stop_process_pool, wait_for
+    from taptune.gui.main_window import MainWindow
+    from taptune.model.reduced import cached_evaluator
+
+    app = application()
+    library = Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-app-{os.getpid()}.json"
+    for jobs in jobs_list:
+        pool = start_process_pool() if jobs is None else None
+        if pool is not None:
+            pool.warming.wait(60)  # the app starts its workers with the window
+        options = IdentifyOptions(seed=0, jobs=pool.processes if pool else 1)
+        label = f"pool of {pool.processes}" if pool else "one process"
+        for name, wav, toml, _ in itertools.islice(cases(), n_cases):
+            cached_evaluator.cache_clear()
+            window = MainWindow(library, identify_options=options, devices=lambda: [])
+            window.show()
+            window.load_recording(str(wav), str(toml))
+            wait_for(window.analysis_ready, 120)
+            times = []
+            for _ in range(2):
+                t0 = time.perf_counter()
+                window.start_identification()
+                ended = wait_for(window.identification_ended, 300)
+                loop = QEventLoop()
+                QTimer.singleShot(0, loop.quit)  # let the fitted view paint
+                loop.exec()
+                times.append(time.perf_counter() - t0)
+                assert ended and ended[0] == "finished", ended
+            print(f"app, {label:12s} {name:16s} click to fitted view: {times[0]:.2f} s, again {times[1]:.2f} s "
+                  f"(load {os.getloadavg()[0]:.1f})", flush=True)
+            window.close()
+        if pool is not None:
+            stop_process_pool()
+    del app
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=None)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--profile", action="store_true", help="cProfile the identifications (use with --jobs 1)")
+    ap.add_argument("--app", action="store_true", help="time click-to-fitted-view in the offscreen app instead")
+    ap.add_argument("--cases", type=int, default=None, help="only the first N cases")
     args = ap.parse_args()
+    if args.app:
+        app_figures(args.cases)
+        return
     profiler = None
     if args.profile:
         import cProfile
@@ -70,7 +124,7 @@ def main() -> None:
     print(f"{'case':16s} {'evals':>6s} {'wall [s]':>8s} {'CPU [s]':>7s} {'fit err [%]':>11s} "
           f"{'pred err [%] f1 f2 f3 per stick-out':>40s} {'inside':>6s} {'± [%]':>6s}")
     walls, cpus, errors, inside, widths = [], [], [], [], []
-    for name, wav, toml, other in cases():
+    for name, wav, toml, other in itertools.islice(cases(), args.cases):
         asm = load_assembly(toml)
         rec = read_audio(wav)
         times, cpu = [], []
