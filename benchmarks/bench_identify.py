@@ -1,17 +1,26 @@
-"""Wall time and evaluations of one identification, and prediction accuracy where truth is known.
+"""Evaluations, wall and CPU seconds of one identification, and prediction accuracy where truth is known.
 
-Runs ``identify`` (analysis + evaluator build + GA islands + polishes + full-model check)
-on the bundled example recordings and, when ``../shared/cases-dev`` is present, on the
-development cases, then predicts their other stick-outs and compares with the truth.
+Runs ``identify`` (analysis + evaluator build + GA islands + polishes + near-optimal set
++ full-model check) on the bundled example recordings and, when ``../shared/cases-dev``
+is present, on the development cases, then predicts their other stick-outs and compares
+with the truth. Per case it prints the model evaluations, the wall time, the CPU time
+(this process and its worker processes), the fit error, the prediction errors, how many
+truths lie inside the reported ± band and the band's mean half-width (the near-optimal
+set's spread). The load average is printed with the wall times: the machine may be shared.
 
-Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N]``.
+With ``--app`` it times instead, in the offscreen app, the click on Identify to the fitted
+view: with one process, then with the app's warm process pool.
+
+Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile] [--app]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
+import resource
 import sys
 import time
 from pathlib import Path
@@ -42,40 +51,119 @@ def cases():
         yield (f"dev {d.name}", d / "tap.wav", d / "assembly.toml", other)
 
 
+def cpu_seconds() -> float:
+    """CPU time of this process and of its finished (joined) worker processes [s]."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def app_figures(n_cases: int | None = None, jobs_list=(1, None)) -> None:
+    """Click-to-fitted-view wall time in the (offscreen) app: one process, then the warm pool.
+
+    Per case the first identification builds the evaluator; the second, as after the next
+    tap on the same assembly, reuses it.
+    """
+    os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    from PySide6.QtCore import QEventLoop, QTimer
+
+    from taptune.gui.app import application, start_process_pool, stop_process_pool, wait_for
+    from taptune.gui.main_window import MainWindow
+    from taptune.model.reduced import cached_evaluator
+
+    app = application()
+    library = Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-app-{os.getpid()}.json"
+    for jobs in jobs_list:
+        pool = start_process_pool() if jobs is None else None
+        if pool is not None:
+            pool.warming.wait(60)  # the app starts its workers with the window
+        options = IdentifyOptions(seed=0, jobs=pool.processes if pool else 1)
+        label = f"pool of {pool.processes}" if pool else "one process"
+        for name, wav, toml, _ in itertools.islice(cases(), n_cases):
+            cached_evaluator.cache_clear()
+            window = MainWindow(library, identify_options=options, devices=lambda: [])
+            window.show()
+            window.load_recording(str(wav), str(toml))
+            wait_for(window.analysis_ready, 120)
+            times = []
+            for _ in range(2):
+                t0 = time.perf_counter()
+                window.start_identification()
+                ended = wait_for(window.identification_ended, 300)
+                loop = QEventLoop()
+                QTimer.singleShot(0, loop.quit)  # let the fitted view paint
+                loop.exec()
+                times.append(time.perf_counter() - t0)
+                assert ended and ended[0] == "finished", ended
+            print(f"app, {label:12s} {name:16s} click to fitted view: {times[0]:.2f} s, again {times[1]:.2f} s "
+                  f"(load {os.getloadavg()[0]:.1f})", flush=True)
+            window.close()
+        if pool is not None:
+            stop_process_pool()
+    del app
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=None)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--profile", action="store_true", help="cProfile the identifications (use with --jobs 1)")
+    ap.add_argument("--app", action="store_true", help="time click-to-fitted-view in the offscreen app instead")
+    ap.add_argument("--cases", type=int, default=None, help="only the first N cases")
     args = ap.parse_args()
-    print(f"{'case':16s} {'wall [s]':>8s} {'evals':>6s} {'fit err max [%]':>15s} {'pred err [%] f1 f2 f3 per stick-out':>40s} {'inside ±':>8s}")
-    walls, errors, inside = [], [], []
-    for name, wav, toml, other in cases():
+    if args.app:
+        app_figures(args.cases)
+        return
+    profiler = None
+    if args.profile:
+        import cProfile
+
+        profiler = cProfile.Profile()
+    print(f"load average at start: {os.getloadavg()[0]:.2f} (cores: {os.cpu_count()})")
+    print(f"{'case':16s} {'evals':>6s} {'wall [s]':>8s} {'CPU [s]':>7s} {'fit err [%]':>11s} "
+          f"{'pred err [%] f1 f2 f3 per stick-out':>40s} {'inside':>6s} {'± [%]':>6s}")
+    walls, cpus, errors, inside, widths = [], [], [], [], []
+    for name, wav, toml, other in itertools.islice(cases(), args.cases):
         asm = load_assembly(toml)
         rec = read_audio(wav)
-        times = []
+        times, cpu = [], []
         for _ in range(args.repeat):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), cpu_seconds()
+            if profiler:
+                profiler.enable()
             analyses, result = identify_recordings([rec], [asm], IdentifyOptions(seed=args.seed, jobs=args.jobs))
+            if profiler:
+                profiler.disable()
             times.append(time.perf_counter() - t0)
+            cpu.append(cpu_seconds() - c0)
         walls.append(min(times))
+        cpus.append(min(cpu))
         meas = np.array([np.nan if f is None else f for f in result.bending_measured_hz[0]])
         fit_err = np.nanmax(np.abs(np.array(result.bending_model_hz[0]) / meas - 1)) * 100
-        texts = []
+        texts, case_inside, case_width = [], [], []
         for so, (truth, path) in sorted(other.items()):
             target = load_assembly(path) if path else asm.with_stickout(so * 1e-3)
             p = predict(result.param_sets, target)
             e = (np.array(p.bending_hz) / np.array(truth) - 1) * 100
             errors.extend(np.abs(e))
-            inside.extend(np.abs(np.array(p.bending_hz) - truth) <= np.array(p.bending_hz_spread))
+            case_inside.extend(np.abs(np.array(p.bending_hz) - truth) <= np.array(p.bending_hz_spread))
+            case_width.extend(np.array(p.bending_hz_spread) / np.array(p.bending_hz) * 100)
             texts.append(" ".join(f"{x:+.2f}" for x in e))
-        print(f"{name:16s} {walls[-1]:8.2f} {result.evaluations:6d} {fit_err:15.3f} {' | '.join(texts):>40s} "
-              f"{np.mean(inside[-3 * len(other):]):8.0%}")
+        inside.extend(case_inside)
+        widths.extend(case_width)
+        print(f"{name:16s} {result.evaluations:6d} {walls[-1]:8.2f} {cpus[-1]:7.2f} {fit_err:11.3f} "
+              f"{' | '.join(texts):>40s} {np.mean(case_inside):6.0%} {np.mean(case_width):6.3f}", flush=True)
     errors = np.array(errors)
     print(f"\nidentification wall time: median {np.median(walls):.2f} s, max {max(walls):.2f} s "
-          f"(jobs={args.jobs or 'all cores'})")
+          f"(jobs={args.jobs or 'all cores'}; load average now {os.getloadavg()[0]:.2f}); "
+          f"CPU time: median {np.median(cpus):.2f} s, max {max(cpus):.2f} s")
     print(f"prediction error over {len(errors)} frequencies: median {np.median(errors):.3f} %, max {errors.max():.3f} %; "
-          f"truth inside the reported ± band: {np.mean(inside):.0%}")
+          f"truth inside the reported ± band: {np.mean(inside):.0%}; band half-width: mean {np.mean(widths):.3f} %")
+    if profiler:
+        import pstats
+
+        pstats.Stats(profiler).sort_stats("cumulative").print_stats(45)
 
 
 if __name__ == "__main__":

@@ -90,6 +90,32 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
         loop.exec()
 
 
+def start_process_pool():
+    """Start the identification workers once and make every identification use them.
+
+    Forking under Qt's threads is unsafe, so they are ``spawn``-started interpreters,
+    kept warm for the whole session (:class:`taptune.identify.search.WarmPool`); they
+    start in the background while the window opens. Returns the pool.
+    """
+    from taptune.identify import search
+
+    pool = search.shared_pool()
+    if pool is None:
+        pool = search.WarmPool()
+        search.set_shared_pool(pool)
+    return pool
+
+
+def stop_process_pool() -> None:
+    """Stop the workers of :func:`start_process_pool` (at exit)."""
+    from taptune.identify import search
+
+    pool = search.shared_pool()
+    if pool is not None:
+        search.set_shared_pool(None)
+        pool.close()
+
+
 def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768), view=None,
         identify: bool = False, holder=None, second=None, machine=None, check: bool = False) -> int:
     """Open the main window (and load ``wav``); with ``screenshot`` save a PNG of it and return.
@@ -110,9 +136,13 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
                            "or use --screenshot PNG to render the window to a file")
     app = application()
     from taptune.gui.main_window import MainWindow
+    from taptune.identify import IdentifyOptions
     from taptune.library import default_library_path
 
-    window = MainWindow(default_library_path(library))
+    # Both cores identify; a screenshot without identification needs no workers.
+    pool = start_process_pool() if identify or not screenshot else None
+    options = IdentifyOptions(seed=0, jobs=pool.processes if pool else 1)
+    window = MainWindow(default_library_path(library), identify_options=options)
     if machine:
         window.machine.load_machine(str(machine), remember=not screenshot)
     previous_hook = sys.excepthook
@@ -121,6 +151,7 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
         return _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second, check)
     finally:
         sys.excepthook = previous_hook
+        stop_process_pool()
 
 
 def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, second=None, check=False) -> int:

@@ -158,7 +158,10 @@ class Objective:
 
     ``evaluators[i].evaluate(p, window_hz)`` must return an object with ``bending_hz``
     and ``tip_receptance`` (see :class:`taptune.model.reduced.FastEvaluator`).
-    Counts its evaluations; a failed model evaluation counts as a very bad candidate.
+    Counts its calls; a failed model evaluation counts as a very bad candidate.
+    The summed terms of every point evaluated are remembered (:attr:`memo`): the
+    near-optimal set asks again for the terms of hundreds of archive points, and a GA
+    child that is a clone of its parent costs nothing.
     """
 
     BAD = 1e12
@@ -170,6 +173,7 @@ class Objective:
         self.evaluators = tuple(evaluators)
         self.options = options
         self.evaluations = 0
+        self.memo: dict[bytes, np.ndarray] = {}  # p.tobytes() → summed (frequency, shape) terms
 
     def terms(self, p) -> list[tuple[float, float]]:
         """(frequency term, shape term) per recording at parameter vector p."""
@@ -190,13 +194,23 @@ class Objective:
 
     def summed_terms(self, p) -> np.ndarray:
         """(frequency term, shape term) summed over the recordings; both BAD on failure."""
-        terms = self._guarded_terms(p)
-        return np.array([self.BAD, self.BAD]) if terms is None else np.sum(terms, axis=0)
+        p = np.asarray(p, dtype=float)
+        key = p.tobytes()
+        found = self.memo.get(key)
+        if found is None:
+            terms = self._guarded_terms(p)
+            found = np.array([self.BAD, self.BAD]) if terms is None else np.sum(terms, axis=0)
+            self.memo[key] = found
+        return found
+
+    def known(self, p) -> bool:
+        """Whether the terms at p are remembered (asking for them costs no evaluation)."""
+        return np.asarray(p, dtype=float).tobytes() in self.memo
 
     def __call__(self, p) -> float:
         self.evaluations += 1
-        terms = self._guarded_terms(p)
-        return self.BAD if terms is None else sum(f + s for f, s in terms)
+        f, s = self.summed_terms(p)
+        return self.BAD if f >= self.BAD else float(f + s)
 
     def batch(self, P) -> np.ndarray:
         """J for every row of P."""

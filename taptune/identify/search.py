@@ -1,21 +1,28 @@
 """The parallel search behind :func:`taptune.identify.identify`.
 
-Three phases run as tasks on a pool of forked worker processes (or in-process with
-``jobs=1``; the result is the same, bit for bit):
+Three phases run as tasks on worker processes (or in-process with ``jobs=1``; the
+result is the same, bit for bit):
 
 1. genetic-algorithm islands, each seeded from the master seed;
 2. BOBYQA polishes from each island's best and from diverse good archive points;
 3. the near-optimal set's extent, each parameter pushed low and high inside it
    (:mod:`taptune.identify.uncertainty`).
 
-The objective, with its evaluators, is set in :data:`STATE` before the workers fork, so it
-is built once and shared, never pickled.
+Two kinds of workers. In a plain process (the CLI) a pool is forked per identification:
+the objective, with its evaluators, is set in :data:`STATE` before the fork, so it is
+built once and shared, never pickled. Forking is unsafe once other threads run (Qt's),
+so an app starts a :class:`WarmPool` once (``spawn``: fresh interpreters) and installs
+it with :func:`set_shared_pool`; each identification then sends its objective pickled
+(≈ 3 MB, 3 ms; rebuilding the evaluator in a worker costs 0.45 s), and each worker
+unpickles it once.
 """
 
 from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import pickle
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +37,8 @@ STATE: dict = {}
 
 @dataclass(frozen=True)
 class RunResult:
-    """One task's outcome: its best point and the archive points near it."""
+    """One task's outcome: its best point and the archive points near it (with their
+    summed terms, ``archive_terms`` (k, 2), so the near-optimal set need not re-evaluate them)."""
 
     u: np.ndarray
     value: float
@@ -38,6 +46,20 @@ class RunResult:
     archive_u: np.ndarray
     archive_f: np.ndarray
     cancelled: bool = False
+    archive_terms: np.ndarray | None = None
+
+
+def _with_terms(objective: Objective, au: np.ndarray) -> np.ndarray:
+    """The remembered summed terms of archive points (all were evaluated by this task's objective)."""
+    return np.array([objective.summed_terms(unit_to_p(u)) for u in au]).reshape(len(au), 2)
+
+
+def remember(objective: Objective, results: list[RunResult]) -> None:
+    """Put the terms that tasks computed (maybe in other processes) into the objective's memo."""
+    for r in results:
+        if r.archive_terms is not None:
+            for u, t in zip(r.archive_u, r.archive_terms):
+                objective.memo.setdefault(unit_to_p(u).tobytes(), t)
 
 
 def n_modes(objective: Objective) -> int:
@@ -90,7 +112,7 @@ def ga_task(index: int) -> RunResult:
     start = objective.evaluations
 
     def on_generation(generation, best):
-        counts[index] = generation
+        counts[index % len(counts)] = generation
         return not cancel.is_set()
 
     with _limits():
@@ -102,11 +124,12 @@ def ga_task(index: int) -> RunResult:
         except Cancelled:
             au, af = archive.arrays()
             return RunResult(au[0], float(af[0]), objective.evaluations - start, au[:0], af[:0], True)
-    counts[index] = options.ga.generations
+    counts[index % len(counts)] = options.ga.generations
     au, af = archive.arrays()
     # Polish starts and the near-optimal set come from the neighbourhood of the optimum only.
     keep = af <= ga.value + options.polish_band + near_band(ga.value, options, n_modes(objective))
-    return RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep])
+    return RunResult(ga.u, ga.value, objective.evaluations - start, au[keep], af[keep],
+                     archive_terms=_with_terms(objective, au[keep]))
 
 
 def polish_task(u0: np.ndarray) -> RunResult:
@@ -121,7 +144,8 @@ def polish_task(u0: np.ndarray) -> RunResult:
         u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
     au, af = archive.arrays()
     keep = af <= value + near_band(value, options, n_modes(objective))
-    return RunResult(u, value, objective.evaluations - start, au[keep], af[keep])
+    return RunResult(u, value, objective.evaluations - start, au[keep], af[keep],
+                     archive_terms=_with_terms(objective, au[keep]))
 
 
 def extreme_task(args) -> RunResult:
@@ -187,23 +211,120 @@ class _ProgressFlag:
         return self.flag.is_set()
 
 
-class Workers:
-    """Runs the search phases on forked worker processes (or in-process) and reports progress.
+#: Progress slots of a warm pool (one per island; more islands share slots).
+_SLOTS = 64
 
-    Use as a context manager; ``map(fn, items)`` runs one phase, raising
-    :class:`Cancelled` when the progress callback asked to stop.
+
+def _join_warm_pool(counts, cancel) -> None:
+    """Initializer of a :class:`WarmPool` worker: the shared progress slots and cancel flag."""
+    STATE.update(counts=counts, cancel=cancel, key=None)
+
+
+def _warm_up(_):
+    """Import what the tasks need, so the first identification does not wait for it."""
+    import nlopt  # noqa: F401
+    import threadpoolctl  # noqa: F401
+
+    import taptune.model.reduced  # noqa: F401
+
+    return os.getpid()
+
+
+def _remote(args):
+    """Run one task in a warm worker: unpickle this identification's objective once per worker."""
+    fn, key, blob, item = args
+    if STATE.get("key") != key:
+        objective, options = pickle.loads(blob)
+        STATE.update(objective=objective, options=options, key=key)
+    return fn(item)
+
+
+class WarmPool:
+    """Worker processes started once with ``spawn`` and kept for every identification.
+
+    Safe in a process whose other threads are running (a Qt app): ``spawn`` starts fresh
+    interpreters instead of forking. Workers import the model code as soon as they start,
+    in the background. One identification uses the pool at a time (others wait).
+
+    Parameters
+    ----------
+    processes : int, optional
+        Worker processes; default the CPU count.
+    """
+
+    def __init__(self, processes: int | None = None):
+        ctx = mp.get_context("spawn")
+        self.processes = max(1, processes or os.cpu_count() or 1)
+        self.counts = ctx.Array("i", _SLOTS, lock=False)
+        self.cancel = ctx.Event()
+        self.lock = threading.Lock()
+        self.pool = ctx.Pool(self.processes, initializer=_join_warm_pool, initargs=(self.counts, self.cancel))
+        self.warming = self.pool.map_async(_warm_up, range(self.processes), chunksize=1)
+
+    def close(self) -> None:
+        """Stop the workers (a running identification is cancelled)."""
+        self.cancel.set()
+        self.pool.terminate()
+        self.pool.join()
+
+
+_SHARED: dict = {}
+
+
+def set_shared_pool(pool: WarmPool | None) -> None:
+    """Make ``pool`` the workers of every identification in this process (None: fork per identification)."""
+    _SHARED["pool"] = pool
+
+
+def shared_pool() -> WarmPool | None:
+    """The pool installed with :func:`set_shared_pool`, if any."""
+    return _SHARED.get("pool")
+
+
+class _Slots:
+    """Island progress counters in a warm pool's shared slots."""
+
+    def __init__(self, shared, n: int):
+        self.shared, self.n = shared, n
+        for i in range(min(n, len(shared))):
+            shared[i] = 0
+
+    def __iter__(self):
+        return (self.shared[i % len(self.shared)] for i in range(self.n))
+
+
+class Workers:
+    """Runs the search phases on worker processes (or in-process) and reports progress.
+
+    With a shared :class:`WarmPool` installed the phases run on it; otherwise a pool is
+    forked per identification, but only from the main thread (forking while other
+    threads run is unsafe); ``jobs=1`` runs in-process. Use as a context manager;
+    ``map(fn, items)`` runs one phase, raising :class:`Cancelled` when the progress
+    callback asked to stop.
     """
 
     def __init__(self, objective: Objective, options, progress=None):
-        jobs = max(1, options.jobs or min(options.islands, os.cpu_count() or 1))
-        use_processes = jobs > 1 and "fork" in mp.get_all_start_methods()
-        self.ctx = mp.get_context("fork") if use_processes else None
+        warm = shared_pool()
+        jobs = max(1, options.jobs or min(options.islands, warm.processes if warm else os.cpu_count() or 1))
+        self.warm = warm if jobs > 1 else None
+        main_thread = threading.current_thread() is threading.main_thread()
+        use_fork = jobs > 1 and not self.warm and main_thread and "fork" in mp.get_all_start_methods()
+        self.ctx = mp.get_context("fork") if use_fork else None
         self.jobs = jobs
-        self.counts = self.ctx.Array("i", options.islands, lock=False) if self.ctx else [0] * options.islands
-        self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
         self.total = options.islands * options.ga.generations
         self.progress = progress
         self.phase = (0.05, 0.75, "fitting the model")
+        self.pool = None
+        if self.warm:
+            self.warm.lock.acquire()
+            self.warm.cancel.clear()
+            self.counts = _Slots(self.warm.counts, options.islands)
+            self.cancel = self.warm.cancel
+            self.key = os.urandom(8).hex()
+            self.blob = pickle.dumps((objective, options), protocol=pickle.HIGHEST_PROTOCOL)
+            return
+        self.counts = self.ctx.Array("i", options.islands, lock=False) if self.ctx else [0] * options.islands
+        self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
         STATE.update(objective=objective, options=options, counts=self.counts,
                      cancel=self.cancel if self.ctx else _ProgressFlag(self.report, self.cancel))
         self.pool = self.ctx.Pool(jobs) if self.ctx else None
@@ -219,16 +340,19 @@ class Workers:
             self.phase = phase
             self.report()
         items = list(items)
-        if self.pool is None:
+        if self.pool is None and self.warm is None:
             out = []
             for item in items:
                 out.append(fn(item))
                 if self.cancel.is_set():
                     break
         else:
-            pending = self.pool.map_async(fn, items, chunksize=1)
+            if self.warm is not None:
+                pending = self.warm.pool.map_async(_remote, [(fn, self.key, self.blob, i) for i in items], chunksize=1)
+            else:
+                pending = self.pool.map_async(fn, items, chunksize=1)
             while not pending.ready():
-                pending.wait(0.1)
+                pending.wait(0.05)
                 self.report()
             out = pending.get()
         if self.cancel.is_set() or any(r.cancelled for r in out):
@@ -239,6 +363,9 @@ class Workers:
         return self
 
     def __exit__(self, *exc):
+        if self.warm is not None:
+            self.warm.lock.release()
+            return False
         if self.pool is not None:
             self.pool.terminate()
         STATE.clear()
@@ -253,14 +380,18 @@ def near_optimal_set(objective: Objective, workers: Workers, results: list[RunRe
     pool = af <= j_min + near_band(j_min, options, modes)
     pick = select_diverse(au[pool], af[pool], options.near_candidates)
     cand_u, cand_f = au[pool][pick], af[pool][pick]
+    remember(objective, results)
+    evaluations = sum(not objective.known(unit_to_p(u)) for u in np.vstack([best.u, cand_u]))
     f_best, s_best = summed_terms(objective, unit_to_p, best.u)
     limits = SetLimits(f_best + modes * options.near_frequency, options.near_shape_factor * s_best + options.near_shape_abs)
     terms = np.array([summed_terms(objective, unit_to_p, u) for u in cand_u])
-    evaluations = len(cand_u) + 1
     ok = (terms[:, 0] <= limits.frequency) & (terms[:, 1] <= limits.shape)
     members, values = np.vstack([best.u, cand_u[ok]]), np.concatenate([[-np.inf], cand_f[ok]])
     if options.extreme_axes:
-        tasks = [(axis, sign, best.u, limits) for axis in options.extreme_axes for sign in (-1.0, 1.0)]
+        # Each push starts from the member already farthest that way: the archives have
+        # walked part of the valley, so COBYLA needs far fewer steps to reach its end.
+        tasks = [(axis, sign, members[np.argmax(sign * members[:, axis])], limits)
+                 for axis in options.extreme_axes for sign in (-1.0, 1.0)]
         ends = workers.map(extreme_task, tasks, phase=(0.85, 0.0, "measuring the uncertainty"))
         evaluations += sum(e.evaluations for e in ends)
         found = np.vstack([e.archive_u for e in ends])

@@ -15,9 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from taptune.io.audio import Recording, make_recording
+from taptune.signal.peaks import find_peaks
 
 
 @dataclass(frozen=True)

@@ -119,6 +119,19 @@ def test_the_assembly_constructor_builds_the_same_evaluator(reference):
         np.testing.assert_array_equal(again.evaluate(p, window).tip_receptance, ev.evaluate(p, window).tip_receptance)
 
 
+def test_the_cached_evaluator_is_built_once_per_assembly(reference):
+    """The app identifies the same assembly again and again: its evaluator is reused."""
+    from taptune.model.reduced import cached_evaluator
+
+    first = cached_evaluator(assembly("reference"))
+    assert cached_evaluator(assembly("reference")) is first
+    other = assembly("reference").with_stickout(0.0635)
+    assert cached_evaluator(other) is not first
+    window = 4800.0 + WINDOW
+    p = sample(1, 1, 4)[0]
+    np.testing.assert_array_equal(first.evaluate(p, window).tip_receptance, reference[1].evaluate(p, window).tip_receptance)
+
+
 def test_evaluate_many_equals_evaluate(reference):
     """The batch form gives the single results, stacked."""
     _, ev = reference

@@ -1,0 +1,85 @@
+"""A warm spawn pool (the app's workers) gives the result of one process, and can cancel."""
+
+import threading
+
+import pytest
+
+from taptune.identify import Cancelled, GAOptions, IdentifyOptions, identify
+from taptune.identify import search
+
+from .helpers import model_analysis
+from .test_identify import HOLDER_A
+
+SMALL = dict(islands=2, ga=GAOptions(population=24, generations=8, patience=4), polish_evaluations=40,
+             polish_starts=2, extreme_axes=(0, 4), extreme_evaluations=40, near_candidates=40)
+
+
+@pytest.fixture
+def problem(reference_assembly):
+    return reference_assembly, model_analysis(reference_assembly, HOLDER_A)
+
+
+@pytest.fixture(scope="module")
+def warm_pool():
+    pool = search.WarmPool(2)
+    yield pool
+    pool.close()
+
+
+def _same(a, b):
+    a, b = a.to_dict(), b.to_dict()
+    a.pop("seconds"), b.pop("seconds")
+    assert a == b
+
+
+@pytest.mark.slow
+def test_the_warm_pool_gives_the_single_process_result_from_a_thread(problem, warm_pool):
+    """From a non-main thread (as in the app), identically to jobs=1, twice on the same workers."""
+    asm, analysis = problem
+    alone = identify([analysis], [asm], IdentifyOptions(seed=4, jobs=1, **SMALL))
+    results = []
+
+    def work():
+        for _ in range(2):
+            results.append(identify([analysis], [asm], IdentifyOptions(seed=4, jobs=2, **SMALL)))
+
+    search.set_shared_pool(warm_pool)
+    try:
+        thread = threading.Thread(target=work)
+        thread.start()
+        thread.join(120)
+    finally:
+        search.set_shared_pool(None)
+    assert len(results) == 2
+    for r in results:
+        _same(alone, r)
+
+
+@pytest.mark.slow
+def test_the_warm_pool_can_cancel_and_is_reusable(problem, warm_pool):
+    asm, analysis = problem
+    calls = []
+    search.set_shared_pool(warm_pool)
+    try:
+        with pytest.raises(Cancelled):
+            identify([analysis], [asm], IdentifyOptions(seed=1, jobs=2, **SMALL),
+                     progress=lambda f, m: calls.append(f) or len(calls) < 3)
+        again = identify([analysis], [asm], IdentifyOptions(seed=1, jobs=2, **SMALL))
+    finally:
+        search.set_shared_pool(None)
+    _same(identify([analysis], [asm], IdentifyOptions(seed=1, jobs=1, **SMALL)), again)
+
+
+def test_without_a_pool_a_thread_does_not_fork():
+    """Forking while other threads run is unsafe: from a thread, jobs > 1 runs in-process."""
+    seen = []
+
+    def work():
+        # The objective is only stored for the tasks: none is needed to see where they would run.
+        with search.Workers(None, IdentifyOptions(jobs=2, **SMALL)) as w:
+            seen.append((w.pool, w.warm))
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join(30)
+    assert seen == [(None, None)]
