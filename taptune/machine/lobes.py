@@ -16,6 +16,12 @@ requested speed grid: every lobe is cut into segments between consecutive scan p
 chatter frequency of the segment that sets the boundary is kept per speed. Lobes are
 followed down to the lowest requested speed.
 
+Speed (the Machine view redraws on a slider): the lobes are stacked in blocks and done
+at once, and a lobe skips the segments whose both ends lie above an upper bound of the
+boundary over the speeds it can reach (a first envelope from the low segments alone).
+Skipped segments can never set the boundary, so the result is the same as lobe by lobe
+(tests/machine/test_lobes.py checks it against a plain per-lobe route).
+
 Chatter-frequency scan: every frequency of the FRF grid, plus ``refine`` extra points
 per grid interval (cubic interpolation of the FRF in re and im) within ``REFINE_BANDS``
 half-power bandwidths of each dominant peak of |Φxx|, |Φyy|, where the lobes are
@@ -31,6 +37,7 @@ Signatures::
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,6 +49,10 @@ MM = 1e-3
 #: Half-power bandwidths on each side of a dominant peak where the scan is refined.
 REFINE_BANDS = 6.0
 MILLING = ("up", "down")
+#: First pass of the envelope: segments with a limit below this many critical depths.
+LOW_SEGMENTS = 4.0
+#: Lobes × segments handled at once by the envelope (bounds its temporary arrays).
+BLOCK_ELEMENTS = 500_000
 
 
 def engagement_angles(ae: float, diameter: float, milling: str) -> tuple[float, float]:
@@ -96,9 +107,10 @@ class Lobes:
         Lowest limit over all speeds [m] (the minimum over the whole scan).
     pockets : tuple of (rpm, a_lim [m])
         Local maxima of the boundary inside the grid (lobe peaks), best first.
-    curves : tuple of (k, rpm ndarray, a_lim ndarray)
+    curves : sequence of (k, rpm ndarray, a_lim ndarray)
         Every lobe k (both roots) that reaches the grid, in chatter-frequency order over
-        the scan (NaN/inf where a root gives no positive limit), for plots.
+        the scan (NaN/inf where a root gives no positive limit), for plots; a
+        :class:`LobeCurves`, whose arrays are built when read.
     warnings : tuple of str
         E.g. speeds that no lobe reaches because the FRF's band ends too early.
     """
@@ -185,35 +197,143 @@ def _follow(lam) -> np.ndarray:
     return np.where(flip[None, :], lam[::-1], lam)
 
 
-def _lower_envelope(grid, n, a, fc, best, chatter) -> bool:
-    """Lower ``best`` (and set ``chatter``) on the ascending speed grid with one lobe curve.
+def _speeds(omega, eps, teeth: int, k):
+    """n_k = 60 ω_c / (N (ε + 2kπ)) [rpm]; one expression everywhere, so every route agrees bitwise."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return 60 * omega / (teeth * (eps + 2 * k * np.pi))
 
-    The curve (n, a, f_c) over the scan is cut into segments between consecutive valid
-    scan points; each segment is interpolated linearly onto the grid speeds it spans
-    (its monotonic piece). Returns whether the curve reached the grid.
+
+def _envelope(grid, omega, eps, a_lim, fs, teeth: int, limit):
+    """Lower envelope of lobes k = 0 … len(limit) − 1 on the ascending speed grid.
+
+    Returns (best [m], chatter [Hz]). Lobe k uses the valid scan segments (i, i+1) whose
+    lower end is at most ``limit[k]`` [m] (non-increasing in k). All lobes of a block are
+    done at once: each segment of each lobe is interpolated linearly in n_k onto the grid
+    speeds it spans (its monotonic piece). Pairs are visited in the order (k, root,
+    segment), and on equal limits the later one sets the chatter frequency.
     """
-    ok = np.isfinite(a) & np.isfinite(n)
-    seg = np.flatnonzero(ok[:-1] & ok[1:])
-    if seg.size == 0:
-        return False
-    n0, n1 = n[seg], n[seg + 1]
-    lo = np.searchsorted(grid, np.minimum(n0, n1), "left")
-    hi = np.searchsorted(grid, np.maximum(n0, n1), "right")
-    count = hi - lo
-    if count.sum() == 0:
-        return bool(np.any((n[ok] >= grid[0]) & (n[ok] <= grid[-1])))
-    which = np.repeat(np.arange(seg.size), count)
-    # Grid index of every (segment, speed) pair: lo of its segment plus its rank inside.
-    start = np.cumsum(count) - count
-    g = lo[which] + np.arange(which.size) - start[which]
-    s0 = seg[which]
-    dn = n[s0 + 1] - n[s0]
-    t = np.where(dn != 0, (grid[g] - n[s0]) / np.where(dn != 0, dn, 1.0), 0.0)
-    val = a[s0] + t * (a[s0 + 1] - a[s0])
-    np.minimum.at(best, g, val)
-    win = val <= best[g]
-    chatter[g[win]] = (fc[s0] + t * (fc[s0 + 1] - fc[s0]))[win]
-    return True
+    best = np.full(len(grid), np.inf)
+    chatter = np.full(len(grid), np.nan)
+    ok = np.isfinite(a_lim) & np.isfinite(eps)
+    lowest = np.minimum(a_lim[:, :-1], a_lim[:, 1:])
+    seg = [np.flatnonzero(ok[r, :-1] & ok[r, 1:] & (lowest[r] <= limit[0])) for r in range(2)]
+    s = np.concatenate(seg)
+    root = np.repeat([0, 1], [len(seg[0]), len(seg[1])])
+    low_end = lowest[root, s]
+    by_low = np.argsort(low_end, kind="stable")
+    kept = np.searchsorted(low_end[by_low], limit, "right")  # segments per lobe, non-increasing in k
+    k0 = 0
+    while k0 < len(limit) and kept[k0] > 0:
+        # The lobes of a block use the segments of its first one, each masked to its own;
+        # back in scan order, so that ties resolve as lobe by lobe.
+        c = np.sort(by_low[: kept[k0]])
+        halved = int(np.searchsorted(-kept, -(kept[k0] // 2), "left"))  # where a lobe keeps half as many
+        block = max(1, min(BLOCK_ELEMENTS // c.size, halved - k0))
+        k = np.arange(k0, min(k0 + block, len(limit)))[:, None]
+        k0 += block
+        sc, rc = s[c], root[c]
+        w0, w1, e0, e1 = omega[sc], omega[sc + 1], eps[rc, sc], eps[rc, sc + 1]
+        a0, da = a_lim[rc, sc], a_lim[rc, sc + 1] - a_lim[rc, sc]
+        f0, df = fs[sc], fs[sc + 1] - fs[sc]
+        n0, n1 = _speeds(w0, e0, teeth, k), _speeds(w1, e1, teeth, k)
+        low, high = np.fmin(n0, n1), np.fmax(n0, n1)
+        near = (high >= grid[0]) & (low <= grid[-1]) & np.isfinite(low) & np.isfinite(high)
+        row, j = np.nonzero(near & (low_end[c][None, :] <= limit[k]))
+        lo = np.searchsorted(grid, low[row, j], "left")
+        # Most segments span no grid speed (the scan is finer than the grid): drop them
+        # before the second search.
+        span = np.flatnonzero(grid[np.minimum(lo, len(grid) - 1)] <= high[row, j])
+        if span.size == 0:
+            continue
+        row, j, lo = row[span], j[span], lo[span]
+        count = np.searchsorted(grid, high[row, j], "right") - lo
+        which = np.repeat(np.arange(j.size), count)
+        # Grid index of every (segment, speed) pair: lo of its segment plus its rank inside.
+        start = np.cumsum(count) - count
+        g = lo[which] + np.arange(which.size) - start[which]
+        row, j = row[which], j[which]
+        m0 = n0[row, j]
+        dn = n1[row, j] - m0
+        t = np.where(dn != 0, (grid[g] - m0) / np.where(dn != 0, dn, 1.0), 0.0)
+        val = a0[j] + t * da[j]
+        np.minimum.at(best, g, val)
+        win = val <= best[g]
+        chatter[g[win]] = (f0[j] + t * df[j])[win]
+    return best, chatter
+
+
+def _lobes_below(omega, eps, teeth: int, speed: float, strict: bool, k_cap: int):
+    """Per scan point, how many lobes k = 0, 1, … put it above ``speed`` [rpm] (> if ``strict``, else ≥).
+
+    n_k falls with k, so these lobes are a prefix: inverted analytically, then corrected
+    with :func:`_speeds` itself so that the count agrees with the direct comparison
+    (capped at ``k_cap``).
+    """
+    def above(k):
+        n = _speeds(omega, eps, teeth, k)
+        return n > speed if strict else n >= speed
+
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        guess = np.ceil((60 * omega / (teeth * speed) - eps) / (2 * np.pi))
+    k = np.clip(np.nan_to_num(guess, nan=0.0), 0, k_cap).astype(np.int64)
+    for _ in range(64):
+        up = (k < k_cap) & above(k)
+        down = (k > 0) & ~above(np.maximum(k - 1, 0))
+        if not (up.any() or down.any()):
+            break
+        k = k + up - down
+    return k
+
+
+def _reached(grid, omega, eps, a_lim, teeth: int, k_max: int) -> np.ndarray:
+    """(k_max + 1, 2) bool: lobe k of root r reaches the speed grid.
+
+    It does when a valid scan point lands inside the grid's span or a valid segment
+    crosses all of it. Found per scan point from the range of k that puts it inside the
+    span, without evaluating every lobe at every point.
+    """
+    out = np.zeros((k_max + 1, 2), bool)
+    for r in range(2):
+        ok = np.isfinite(a_lim[r]) & np.isfinite(eps[r])
+        pair = ok[:-1] & ok[1:]
+        if not pair.any():
+            continue
+        i = np.flatnonzero(ok)
+        first = np.full(len(omega), k_max + 2)  # first lobe at or below the top speed
+        last = np.full(len(omega), -1)  # last lobe at or above the bottom speed
+        first[i] = _lobes_below(omega[i], eps[r, i], teeth, grid[-1], True, k_max + 2)
+        last[i] = _lobes_below(omega[i], eps[r, i], teeth, grid[0], False, k_max + 2) - 1
+        s = np.flatnonzero(pair)
+        # Intervals of k: points inside the span, then segments from above it to below it (both ways).
+        lo = np.concatenate([first[i], last[s + 1] + 1, last[s] + 1])
+        hi = np.minimum(np.concatenate([last[i], first[s] - 1, first[s + 1] - 1]), k_max)
+        use = lo <= hi
+        edges = np.bincount(lo[use], minlength=k_max + 2)[: k_max + 2]
+        edges -= np.bincount(hi[use] + 1, minlength=k_max + 2)[: k_max + 2]
+        out[:, r] = np.cumsum(edges)[: k_max + 1] > 0
+    return out
+
+
+class LobeCurves(Sequence):
+    """Every lobe that reaches the speed grid as (k, rpm ndarray, a_lim ndarray [m]), built on access.
+
+    There can be a thousand lobes over the whole scan each; only a plot needs them, so the
+    arrays are computed when an item is read (NaN speed where the root gives no limit).
+    """
+
+    def __init__(self, omega, eps, a_lim, teeth: int, which):
+        self._omega, self._eps, self._a, self._teeth = omega, eps, a_lim, teeth
+        self._which = tuple((int(k), int(r)) for k, r in which)
+
+    def __len__(self) -> int:
+        return len(self._which)
+
+    def __getitem__(self, item):
+        if isinstance(item, slice):
+            return [self[j] for j in range(*item.indices(len(self)))]
+        k, r = self._which[item]
+        n = _speeds(self._omega, self._eps[r], self._teeth, k)
+        return k, np.where(np.isfinite(self._a[r]), n, np.nan), self._a[r]
 
 
 def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,
@@ -273,14 +393,18 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
     k_max = int(np.ceil(np.nanmax(60 * omega / (teeth * n_lo) / (2 * np.pi)))) + 1
     order = np.argsort(speeds)
     grid = speeds[order]
-    best = np.full(len(grid), np.inf)
-    chatter = np.full(len(grid), np.nan)
-    curves = []
-    for k in range(k_max + 1):
-        n_k = 60 * omega[None, :] / (teeth * (eps + 2 * k * np.pi))
-        for r in range(2):
-            if _lower_envelope(grid, n_k[r], a_lim[r], fs, best, chatter):
-                curves.append((k, np.where(np.isfinite(a_lim[r]), n_k[r], np.nan), a_lim[r]))
+    # A segment of lobe k whose both ends lie above the boundary on every speed lobe k can
+    # reach never sets it. First the boundary from the low segments alone (an upper bound
+    # of the true one), then each lobe keeps the segments that may still come under it.
+    first = np.full(k_max + 1, LOW_SEGMENTS * a_crit)
+    best, chatter = _envelope(grid, omega, eps, a_lim, fs, teeth, first)
+    if np.max(best) > first[0]:
+        with np.errstate(divide="ignore"):
+            reach = 60 * omega[-1] / (teeth * 2 * np.arange(k_max + 1) * np.pi) * (1 + 1e-9)  # n_k below this
+        top = np.maximum.accumulate(best) * (1 + 1e-9)
+        i = np.searchsorted(grid, reach, "right") - 1
+        best, chatter = _envelope(grid, omega, eps, a_lim, fs, teeth, np.where(i >= 0, top[np.maximum(i, 0)], -np.inf))
+    curves = LobeCurves(omega, eps, a_lim, teeth, np.argwhere(_reached(grid, omega, eps, a_lim, teeth, k_max)))
     out_a = np.empty_like(best)
     out_c = np.empty_like(chatter)
     out_a[order], out_c[order] = best, chatter
@@ -292,7 +416,7 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
             f"their chatter frequencies lie outside the FRF's band ({f[0]:g}–{f[-1]:g} Hz); the limit there is unknown"
         )
     return Lobes(rpm=speeds, a_lim=out_a, chatter_hz=out_c, a_crit=a_crit, pockets=_pockets(grid, best),
-                 curves=tuple(curves), warnings=tuple(warnings))
+                 curves=curves, warnings=tuple(warnings))
 
 
 def _pockets(grid, a) -> tuple:

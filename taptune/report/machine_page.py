@@ -2,9 +2,9 @@
 
 A batch with ``--machine`` attaches a :class:`MachineView` to each
 :class:`~taptune.report.pdf.ReportPage` (built in the worker, picklable: arrays and
-numbers only); :func:`draw_machine` draws it into a (sub)figure of the page. The
-full-size pictures of ``taptune toolpoint --plot`` and ``taptune lobes --plot`` are
-:mod:`taptune.report.machine_plot`; these are their page-sized, vector versions.
+numbers only); :func:`draw_machine` draws it into a (sub)figure of the page with the
+drawing functions of :mod:`taptune.report.machine_plot` (those of ``taptune toolpoint
+--plot`` and ``taptune lobes --plot``), page-sized.
 """
 
 from __future__ import annotations
@@ -13,9 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from taptune.report.machine_plot import MARKED_POCKETS, UM_PER_N
+from taptune.report.machine_plot import draw_lobes, draw_toolpoint
 
-LABELLED_POCKETS = 3
+#: Text of the page-sized drawings: labels 9 pt, legends 7.5 pt, annotations 6.25 pt.
+PAGE_TEXT = {"font.size": 9.0}
 MARKED_MODES = 4  # the strongest tool-point peaks, each marked once
 
 
@@ -42,7 +43,13 @@ class MachineView:
 
 
 def draw_machine(fig, view: MachineView) -> None:
-    """Fill ``fig`` (a subfigure of the page) with |G| of the tool point (left) and the lobes (right)."""
+    """Fill ``fig`` (a subfigure of the page) with |G| of the tool point (left) and the lobes (right).
+
+    The drawings are those of :mod:`taptune.report.machine_plot`, at page size: the text
+    scaled down through ``font.size``.
+    """
+    import matplotlib
+
     fig.suptitle(view.title, fontsize=9, x=0.01, ha="left")
     if view.error:
         ax = fig.add_subplot(1, 1, 1)
@@ -50,24 +57,13 @@ def draw_machine(fig, view: MachineView) -> None:
         ax.text(0.0, 0.8, f"machine part not computed:\n{view.error}", va="top", ha="left", fontsize=9,
                 color="#c0392b", wrap=True, transform=ax.transAxes)
         return
-    frf_ax, lobe_ax = fig.subplots(1, 2, width_ratios=[1, 1.25])
-    draw_toolpoint_magnitude(frf_ax, view)
-    draw_lobe_diagram(lobe_ax, view)
-
-
-def draw_toolpoint_magnitude(ax, view: MachineView) -> None:
-    """|G_xx| solid, |G_yy| dashed [µm/N] against frequency, the dominant modes marked."""
-    for g, style, colour, d in ((view.xx, "-", "#2c3e50", "x"), (view.yy, "--", "#e67e22", "y")):
-        ax.semilogy(view.freq_hz, np.abs(g) * UM_PER_N, style, lw=1.0, color=colour, label=f"G_{d}{d}")
-    for hz in marked_modes(view.modes):
-        ax.axvline(hz, color="#c0392b", lw=0.6, alpha=0.6)
-        ax.annotate(f"{hz:.0f} Hz", (hz, 1.0), xycoords=("data", "axes fraction"), rotation=90,
-                    xytext=(2, -4), textcoords="offset points", fontsize=6.5, color="#c0392b", va="top")
-    ax.set_xlabel("frequency [Hz]", fontsize=8)
-    ax.set_ylabel("tool point |G| [µm/N]", fontsize=8)
-    ax.tick_params(labelsize=7)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="lower left")
+    with matplotlib.rc_context(PAGE_TEXT):
+        frf_ax, lobe_ax = fig.subplots(1, 2, width_ratios=[1, 1.25])
+        draw_toolpoint(frf_ax, [("", view.freq_hz, view.xx, view.yy)], marked_modes(view.modes))
+        draw_lobes(lobe_ax, view.rpm, view.a_lim_mm, view.a_crit_mm, view.pockets)
+        lobe_ax.set_title(view.cut, fontsize=7.5, loc="left")
+        for ax in (frf_ax, lobe_ax):
+            ax.tick_params(labelsize=7)
 
 
 def marked_modes(modes, n: int = MARKED_MODES, apart: float = 0.03) -> list[float]:
@@ -78,28 +74,3 @@ def marked_modes(modes, n: int = MARKED_MODES, apart: float = 0.03) -> list[floa
         if len(marked) < n and all(abs(hz - m) > apart * m for m in marked):
             marked.append(hz)
     return marked
-
-
-def draw_lobe_diagram(ax, view: MachineView) -> None:
-    """The stability limit over speed, the critical depth and the best pockets."""
-    a = np.asarray(view.a_lim_mm, dtype=float)
-    ax.fill_between(view.rpm, 0, np.where(np.isfinite(a), a, np.nan), color="#27ae60", alpha=0.15, lw=0)
-    ax.plot(view.rpm, a, color="#1e8449", lw=1.1, label="stability limit")
-    if view.a_crit_mm is not None:
-        ax.axhline(view.a_crit_mm, color="#c0392b", ls="--", lw=0.9, label=f"critical depth {view.a_crit_mm:.3g} mm")
-    for k, p in enumerate(view.pockets[:MARKED_POCKETS]):
-        ax.plot(p["rpm"], p["a_lim_mm"], "v", color="#2c3e50", ms=5 if k < LABELLED_POCKETS else 3)
-        if k < LABELLED_POCKETS:
-            ax.annotate(f"{p['rpm']:.0f}\n{p['a_lim_mm']:.2g} mm", (p["rpm"], p["a_lim_mm"]),
-                        textcoords="offset points", xytext=(0, 5), ha="center", fontsize=6.5)
-    finite = a[np.isfinite(a)]
-    top = max(float(finite.max()) if finite.size else 0.0, view.a_crit_mm or 0.0)
-    ax.set_ylim(0, 1.25 * top if top > 0 else 1.0)
-    if len(view.rpm):
-        ax.set_xlim(float(view.rpm[0]), float(view.rpm[-1]))
-    ax.set_xlabel("spindle speed [rpm]", fontsize=8)
-    ax.set_ylabel("axial depth a_p [mm]", fontsize=8)
-    ax.set_title(view.cut, fontsize=7.5, loc="left")
-    ax.tick_params(labelsize=7)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")

@@ -1,8 +1,12 @@
 """Pictures of the machine stage: tool-point FRFs, stability lobes, spindle receptances.
 
-Arrays in (SI: m/N, Hz, rpm; depths in mm), a PNG out through
-:func:`taptune.report.figures.save_png`. matplotlib is imported inside the functions
-(Agg backend), so importing this module costs nothing on the CLI's fast paths.
+``draw_*`` draw into matplotlib Axes the caller made (the PNGs here, the batch report
+page :mod:`taptune.report.machine_page`, the GUI) and return nothing; ``plot_*`` are
+thin wrappers that make a figure and write a PNG through
+:func:`taptune.report.figures.save_png`. Arrays in SI (m/N, Hz, rpm; depths in mm).
+Text sizes are relative ("small"…) so a caller scales them all with ``font.size``.
+matplotlib is imported inside the functions (Agg backend), so importing this module
+costs nothing on the CLI's fast paths.
 """
 
 from __future__ import annotations
@@ -13,6 +17,9 @@ from taptune.report.fit_plot import _pyplot, _save
 
 UM_PER_N = 1e6  # m/N → µm/N for the axes (a machinist reads µm/N)
 MARKED_POCKETS = 8
+LABELLED_POCKETS = 3
+#: x and y of a single tool-point FRF; several FRFs take one colour each from the cycle.
+XY_COLOURS = ("#2c3e50", "#e67e22")
 
 
 def _wrap(title: str, width: int = 100) -> str:
@@ -22,8 +29,91 @@ def _wrap(title: str, width: int = 100) -> str:
     return "\n".join(textwrap.fill(line, width) for line in title.splitlines())
 
 
+def draw_toolpoint(axes, curves, modes_hz=()) -> None:
+    """Draw tool-point FRFs: |G| (log) into ``axes[0]``; Re G and Im G into ``axes[1]``, ``axes[2]`` if given.
+
+    x solid, y dashed. One curve: x and y in two colours, legend G_xx, G_yy; several
+    (stick-outs): one colour per curve, legend "label, x".
+
+    Parameters
+    ----------
+    axes : Axes or sequence of Axes (1 or 3)
+    curves : list of (label, freq_hz, g_xx, g_yy)
+        ``g_xx``, ``g_yy`` complex [m/N] on ``freq_hz`` [Hz].
+    modes_hz : sequence of float
+        Frequencies [Hz] marked with a labelled vertical line on |G| (the dominant modes).
+    """
+    import matplotlib
+
+    axes = list(np.atleast_1d(axes))
+    cycle = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
+    for n, (label, f, gx, gy) in enumerate(curves):
+        colours = XY_COLOURS if len(curves) == 1 else (cycle[n % len(cycle)],) * 2
+        for g, style, d, c in ((gx, "-", "x", colours[0]), (gy, "--", "y", colours[1])):
+            g = np.asarray(g) * UM_PER_N
+            name = f"{label}, {d}" if len(curves) > 1 else f"G_{d}{d}"
+            axes[0].semilogy(f, np.abs(g), style, color=c, lw=1.1, label=name)
+            if len(axes) == 3:
+                axes[1].plot(f, g.real, style, color=c, lw=1.0)
+                axes[2].plot(f, g.imag, style, color=c, lw=1.0)
+    for hz in modes_hz:
+        axes[0].axvline(hz, color="#c0392b", lw=0.6, alpha=0.6)
+        axes[0].annotate(f"{hz:.0f} Hz", (hz, 1.0), xycoords=("data", "axes fraction"), rotation=90, xytext=(2, -4),
+                         textcoords="offset points", fontsize="x-small", color="#c0392b", va="top")
+    for ax, name in zip(axes, ("tool point |G| [µm/N]", "Re G [µm/N]", "Im G [µm/N]")):
+        ax.set_ylabel(name)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[-1].set_xlabel("frequency [Hz]")
+    axes[0].legend(fontsize="small", ncol=2 if len(curves) > 1 else 1, loc="lower left")
+
+
+def draw_lobes(ax, rpm, a_lim_mm, a_crit_mm, pockets) -> None:
+    """Draw a stability-lobe diagram: the stable area, the limit, the critical depth and the best pockets.
+
+    Parameters
+    ----------
+    ax : Axes
+    rpm, a_lim_mm : array_like, shape (n,)
+        The stability boundary: limiting axial depth [mm] per spindle speed [rpm], NaN
+        where no lobe reaches.
+    a_crit_mm : float or None
+        The lowest limit over all speeds [mm] (stable at any speed below it).
+    pockets : sequence of dict
+        ``{"rpm", "a_lim_mm"}`` of the lobe peaks, best first; the best eight are marked
+        and the best three labelled (at low speed the lobes crowd into many tiny peaks).
+    """
+    rpm = np.asarray(rpm, dtype=float)
+    a = np.asarray(a_lim_mm, dtype=float)
+    finite = np.isfinite(a)
+    ax.fill_between(rpm, 0, np.where(finite, a, np.nan), color="#27ae60", alpha=0.15, lw=0, label="stable")
+    ax.plot(rpm, a, color="#1e8449", lw=1.3, label="stability limit")
+    if a_crit_mm is not None:
+        ax.axhline(a_crit_mm, color="#c0392b", ls="--", lw=1.0, label=f"critical depth {a_crit_mm:.3g} mm")
+    for k, p in enumerate(pockets[:MARKED_POCKETS]):
+        ax.plot(p["rpm"], p["a_lim_mm"], "v", color="#2c3e50", ms=6 if k < LABELLED_POCKETS else 4)
+        if k < LABELLED_POCKETS:
+            ax.annotate(f"{p['rpm']:.0f} rpm\n{p['a_lim_mm']:.2g} mm", (p["rpm"], p["a_lim_mm"]),
+                        textcoords="offset points", xytext=(0, 6), ha="center", fontsize="x-small")
+    top = max(float(a[finite].max()) if finite.any() else 0.0, a_crit_mm or 0.0)
+    ax.set_ylim(0, 1.25 * top if top > 0 else 1.0)
+    if rpm.size:
+        ax.set_xlim(rpm.min(), rpm.max())
+    ax.set_xlabel("spindle speed [rpm]")
+    ax.set_ylabel("axial depth of cut a_p [mm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="upper left")
+
+
+def draw_chatter(ax, rpm, chatter_hz) -> None:
+    """Draw the chatter frequency [Hz] on the stability boundary against spindle speed [rpm]."""
+    ax.plot(rpm, np.asarray(chatter_hz, dtype=float), ".", ms=1.5, color="#2c3e50")
+    ax.set_xlabel("spindle speed [rpm]")
+    ax.set_ylabel("chatter [Hz]")
+    ax.grid(True, alpha=0.3)
+
+
 def plot_toolpoint(curves, path, title: str = "") -> None:
-    """Write a PNG of tool-point FRFs: |G| (log), real and imaginary part, x solid and y dashed.
+    """Write a PNG of tool-point FRFs (:func:`draw_toolpoint`: |G|, Re G and Im G).
 
     Parameters
     ----------
@@ -35,68 +125,29 @@ def plot_toolpoint(curves, path, title: str = "") -> None:
     plt = _pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True, layout="constrained",
                              gridspec_kw={"height_ratios": [2, 1, 1]})
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, (label, f, gx, gy) in enumerate(curves):
-        c = colours[k % len(colours)]
-        for g, style, d in ((gx, "-", "x"), (gy, "--", "y")):
-            g = np.asarray(g) * UM_PER_N
-            axes[0].semilogy(f, np.abs(g), style, color=c, lw=1.2, label=f"{label}, {d}")
-            axes[1].plot(f, g.real, style, color=c, lw=1.0)
-            axes[2].plot(f, g.imag, style, color=c, lw=1.0)
-    axes[0].set_ylabel("|G| [µm/N]")
-    axes[1].set_ylabel("Re G [µm/N]")
-    axes[2].set_ylabel("Im G [µm/N]")
-    axes[2].set_xlabel("frequency [Hz]")
-    for ax in axes:
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend(fontsize=8, ncol=2)
+    draw_toolpoint(axes, curves)
+    for ax in axes[:-1]:
+        ax.set_xlabel("")  # shared axis: the frequency label only under the last panel
     axes[0].set_title(_wrap(title or "tool-point FRF on the machine"), fontsize=9)
     _save(fig, path)
 
 
 def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, title: str = "") -> None:
-    """Write a PNG of a stability-lobe diagram.
+    """Write a PNG of a stability-lobe diagram (:func:`draw_lobes`), the chatter frequency below if given.
 
-    Parameters
-    ----------
-    rpm, a_lim_mm : array_like, shape (n,)
-        The stability boundary: limiting axial depth [mm] per spindle speed [rpm].
-    a_crit_mm : float
-        The lowest limit over all speeds [mm] (stable at any speed below it).
-    pockets : list of dict
-        ``{"rpm", "a_lim_mm"}`` of the lobe peaks, best first; the best eight are marked and
-        the best three labelled.
-    chatter_hz : array_like, shape (n,), optional
-        Chatter frequency on the boundary [Hz]; drawn in a second panel when given.
+    Parameters are those of :func:`draw_lobes`, plus ``path`` (the PNG) and
+    ``chatter_hz`` (array_like, shape (n,), optional): the chatter frequency on the
+    boundary [Hz], drawn in a second panel (:func:`draw_chatter`).
     """
     plt = _pyplot()
-    rpm = np.asarray(rpm, dtype=float)
-    a = np.asarray(a_lim_mm, dtype=float)
     rows = 2 if chatter_hz is not None else 1
     fig, axes = plt.subplots(rows, 1, figsize=(8, 6.5 if rows == 2 else 4.5), sharex=True, layout="constrained",
                              gridspec_kw={"height_ratios": [3, 1][:rows]}, squeeze=False)
-    ax = axes[0, 0]
-    ax.fill_between(rpm, 0, a, color="#27ae60", alpha=0.15, lw=0, label="stable")
-    ax.plot(rpm, a, color="#1e8449", lw=1.4, label="stability limit")
-    ax.axhline(a_crit_mm, color="#c0392b", ls="--", lw=1.0, label=f"critical depth {a_crit_mm:.3g} mm")
-    # The best few pockets only: at low speed the lobes crowd into many tiny peaks.
-    for k, p in enumerate(pockets[:MARKED_POCKETS]):
-        ax.plot(p["rpm"], p["a_lim_mm"], "v", color="#2c3e50", ms=6 if k < 3 else 4)
-        if k < 3:
-            ax.annotate(f"{p['rpm']:.0f} rpm\n{p['a_lim_mm']:.2g} mm", (p["rpm"], p["a_lim_mm"]),
-                        textcoords="offset points", xytext=(0, 8), ha="center", fontsize=7)
-    top = max(float(np.nanmax(a)) if a.size else 0.0, a_crit_mm)
-    ax.set_ylim(0, 1.2 * top if top > 0 else 1.0)
-    ax.set_xlim(rpm.min(), rpm.max())
-    ax.set_ylabel("axial depth of cut a_p [mm]")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left")
-    ax.set_title(_wrap(title or "stability lobes (zero-order approximation)"), fontsize=9)
+    draw_lobes(axes[0, 0], rpm, a_lim_mm, a_crit_mm, pockets)
     if chatter_hz is not None:
-        axes[1, 0].plot(rpm, np.asarray(chatter_hz, dtype=float), ".", ms=1.5, color="#2c3e50")
-        axes[1, 0].set_ylabel("chatter [Hz]")
-        axes[1, 0].grid(True, alpha=0.3)
-    axes[-1, 0].set_xlabel("spindle speed [rpm]")
+        axes[0, 0].set_xlabel("")
+        draw_chatter(axes[1, 0], rpm, chatter_hz)
+    axes[0, 0].set_title(_wrap(title or "stability lobes (zero-order approximation)"), fontsize=9)
     _save(fig, path)
 
 
