@@ -1,17 +1,19 @@
 """Verify a holder by one tap: does a new recording agree with the library's prediction?
 
-A holder identified once predicts every tool and stick-out within a band (the spread of
-its near-optimal parameter sets, :func:`~taptune.identify.core.predict`). A new tap of
+A holder identified once predicts every tool and stick-out within an honest band (its
+near-optimal parameter sets, the geometry tolerances and the model form,
+:func:`~taptune.identify.core.predict`). A new tap of
 the same holder must land inside that band; a worn, dirty or badly seated collet has a
 softer contact, and every bending mode drops. :func:`check_tap` compares the measured
 bending peaks with the prediction mode by mode and gives one of three verdicts.
 
 The rules, per mode n with measured f_m, predicted f_p, band ±b and measurement
 uncertainty σ = max(tap-to-tap scatter of the peak, 0.05 % of f_m). The band is the
-prediction's ``bending_hz_spread`` plus, when given, ``setup_hz``: how far the mode moves
-when the stick-out is off by the accuracy it is read to (re-clamping a holder never
-reproduces the stick-out exactly, and near the identified set-up the prediction band
-alone is only the fit's 0.05 %):
+prediction's own ``bending_hz_spread`` (:mod:`taptune.identify.bands`): the
+near-optimal parameter sets, the stated geometry tolerances — the stick-out read off a
+ruler at this tap and at the identification among them — and the calibrated model-form
+term that grows with the stick-out change. Nothing is added to it but σ, the one thing
+it does not contain (how well this tap's peaks are measured):
 
 * the deviation d = f_m − f_p; ``z`` = sign(d)·max(|d| − b, 0)/σ counts the
   measurement's standard deviations *beyond* the band (0 inside it);
@@ -57,12 +59,11 @@ class ModeCheck:
     mode: int
     measured_hz: float | None
     predicted_hz: float
-    band_hz: float  # the half-width the verdict used: prediction band + setup_hz
+    band_hz: float  # the prediction's ± half-width
     sigma_hz: float | None
     deviation_pct: float | None
     z: float | None
     status: str
-    setup_hz: float = 0.0
 
     def to_dict(self) -> dict:
         def r(v, nd):
@@ -70,8 +71,7 @@ class ModeCheck:
 
         return {"mode": self.mode, "measured_hz": r(self.measured_hz, 2), "predicted_hz": r(self.predicted_hz, 2),
                 "band_hz": r(self.band_hz, 2), "sigma_hz": r(self.sigma_hz, 3),
-                "deviation_pct": r(self.deviation_pct, 4), "z": r(self.z, 2), "status": self.status,
-                "setup_hz": r(self.setup_hz, 2)}
+                "deviation_pct": r(self.deviation_pct, 4), "z": r(self.z, 2), "status": self.status}
 
 
 @dataclass(frozen=True)
@@ -91,7 +91,7 @@ class CheckResult:
         return {"verdict": self.verdict, "modes": [m.to_dict() for m in self.modes], "reasons": list(self.reasons)}
 
 
-def check_tap(analysis, prediction, worn_hz=None, setup_hz=None, measurement_floor: float = MEASUREMENT_FLOOR,
+def check_tap(analysis, prediction, worn_hz=None, measurement_floor: float = MEASUREMENT_FLOOR,
               z_outside: float = Z_OUTSIDE) -> CheckResult:
     """Compare the bending peaks of a new tap with a holder's prediction for that assembly.
 
@@ -105,9 +105,6 @@ def check_tap(analysis, prediction, worn_hz=None, setup_hz=None, measurement_flo
         The same prediction with both contact stiffnesses halved [Hz]: what a worn
         holder would sound like. Without it the check cannot tell whether it could
         have seen wear, and never says more than the band allows.
-    setup_hz : array_like, optional
-        Per mode, the shift [Hz] a stick-out error of the reading accuracy causes; added
-        to the prediction's band.
     measurement_floor : float
         Smallest relative 1σ of a measured peak.
     z_outside : float
@@ -122,23 +119,22 @@ def check_tap(analysis, prediction, worn_hz=None, setup_hz=None, measurement_flo
     bandwidth = getattr(analysis, "bandwidth_hz", None)
     worn = None if worn_hz is None else np.asarray(worn_hz, dtype=float)
     modes, reasons, sensitive = [], [], []
-    setup = np.zeros(len(prediction.bending_hz)) if setup_hz is None else np.abs(np.asarray(setup_hz, dtype=float))
     for n, (fp, spread) in enumerate(zip(prediction.bending_hz, prediction.bending_hz_spread), 1):
-        band = float(spread + setup[n - 1])
+        band = float(spread)
         peak = peaks.get(n)
         if peak is None:
-            modes.append(ModeCheck(n, None, fp, band, None, None, None, "not measured", setup[n - 1]))
+            modes.append(ModeCheck(n, None, fp, band, None, None, None, "not measured"))
             continue
         fm = float(peak.hz)
         if bandwidth is not None and max(fm, fp) > (1 - EDGE_MARGIN) * bandwidth:
-            modes.append(ModeCheck(n, fm, fp, band, None, 100 * (fm / fp - 1), None, "hidden", setup[n - 1]))
+            modes.append(ModeCheck(n, fm, fp, band, None, 100 * (fm / fp - 1), None, "hidden"))
             reasons.append(f"mode {n} lies at or above the {bandwidth / 1000:.1f} kHz the recording carries: not used")
             continue
         sigma = max(float(peak.scatter_hz), measurement_floor * fm)
         d = fm - fp
         z = float(np.sign(d) * max(abs(d) - band, 0.0) / sigma)
         status = "inside" if z == 0 else ("outside" if abs(z) > z_outside else "beyond")
-        modes.append(ModeCheck(n, fm, fp, band, sigma, 100 * (fm / fp - 1), z, status, setup[n - 1]))
+        modes.append(ModeCheck(n, fm, fp, band, sigma, 100 * (fm / fp - 1), z, status))
         if worn is not None and n <= worn.size:
             sensitive.append(abs(worn[n - 1] - fp) > band + z_outside * sigma)
     verdict = _verdict(modes, sensitive, worn is not None, reasons)
