@@ -9,7 +9,21 @@ identify it from its tap with the described assembly, then check taps of
 (d) the same holder clamped again at the recorded stick-out (``consistent``; the ruler
 error of re-clamping is drawn anew). :func:`rejudge` re-evaluates the verdicts of saved
 rows with other bands (``check_tap`` is a pure function): how the verdicts depend on the band.
-Needs ``benchmarks.realism`` (the corpus). One identification ≈ 5–7 CPU-s.
+Needs ``benchmarks.realism`` (the corpus). One reference (identification + 5 checks)
+≈ 55 CPU-s.
+
+Result (2026-11-23, 12 references each, consistent/differs/inconclusive)::
+
+                        check split (held out)     infamily (control)
+    re-clamped          7/0/5                      11/0/1
+    elsewhere           7/0/5                       8/0/4
+    worn 0.5            0/9/3                       0/11/1
+    worn 0.3            0/12/0                      0/12/0
+    worn 0.5 elsewhere  0/5/7                       0/5/7
+
+No good holder reads ``differs``, no worn one ``consistent``. The worn holders read
+inconclusive where the true shift is about one band (che007 1.25 % vs ±1.28 %, che009
+2.8 % vs ±2.9 %, inf007 2.1 % vs ±1.35 %) or the identification itself is off (che008).
 
     python -m benchmarks.bench_check --n 12 [--split check|infamily] [--jobs 2] [--out check.json]
 """
