@@ -9,9 +9,23 @@ identify it from its tap with the described assembly, then check taps of
 (d) the same holder clamped again at the recorded stick-out (``consistent``; the ruler
 error of re-clamping is drawn anew). :func:`rejudge` re-evaluates the verdicts of saved
 rows with other bands (``check_tap`` is a pure function): how the verdicts depend on the band.
-Needs ``benchmarks.realism`` (the corpus). One identification ≈ 5–7 CPU-s.
+Needs ``benchmarks.realism`` (the corpus). One reference (identification + 5 checks)
+≈ 55 CPU-s.
 
-    python -m benchmarks.bench_check --n 12 [--split check|infamily] [--out check.json]
+Result (2026-11-23, 12 references each, consistent/differs/inconclusive)::
+
+                        check split (held out)     infamily (control)
+    re-clamped          7/0/5                      11/0/1
+    elsewhere           7/0/5                       8/0/4
+    worn 0.5            0/9/3                       0/11/1
+    worn 0.3            0/12/0                      0/12/0
+    worn 0.5 elsewhere  0/5/7                       0/5/7
+
+No good holder reads ``differs``, no worn one ``consistent``. The worn holders read
+inconclusive where the true shift is about one band (che007 1.25 % vs ±1.28 %, che009
+2.8 % vs ±2.9 %, inf007 2.1 % vs ±1.35 %) or the identification itself is off (che008).
+
+    python -m benchmarks.bench_check --n 12 [--split check|infamily] [--jobs 2] [--out check.json]
 """
 
 from __future__ import annotations
@@ -21,6 +35,7 @@ import json
 import tempfile
 import time
 from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 
@@ -67,14 +82,14 @@ def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
             "truth_hz": [round(f, 2) for f in other.truth.bending_hz],
             "modes": check.result.to_dict()["modes"], "reasons": list(check.result.reasons),
             "worn_hz": [round(f, 2) for f in check.worn_hz],
+            "band": None if check.prediction.band is None else check.prediction.band.to_dict(),
             "identify_cpu_s": round(identify_cpu, 2), "check_cpu_s": round(time.process_time() - t1, 2),
         })
     return rows
 
 
 def rejudge(row: dict, scale: float = 1.0, floor: float = 0.0) -> str:
-    """The verdict of a saved row with every prediction band × ``scale`` and at least ``floor`` × f
-    (the stick-out term, if the row has one, is added unchanged)."""
+    """The verdict of a saved row with every prediction band × ``scale`` and at least ``floor`` × f."""
     from types import SimpleNamespace
 
     from taptune.identify import Prediction
@@ -83,11 +98,10 @@ def rejudge(row: dict, scale: float = 1.0, floor: float = 0.0) -> str:
     modes = row["modes"]
     peaks = [SimpleNamespace(hz=m["measured_hz"], mode=m["mode"], kind="bending", scatter_hz=m["sigma_hz"])
              for m in modes if m["status"] not in ("not measured", "hidden")]
-    setup = [m.get("setup_hz") or 0.0 for m in modes]  # band_hz = prediction band + setup
-    bands = tuple(max(scale * (m["band_hz"] - s), floor * m["predicted_hz"]) for m, s in zip(modes, setup))
+    bands = tuple(max(scale * m["band_hz"], floor * m["predicted_hz"]) for m in modes)
     prediction = Prediction(row["stickout_mm"], tuple(m["predicted_hz"] for m in modes), bands, (0.0,) * 3, (0.0,) * 3)
     analysis = SimpleNamespace(bending_peaks=peaks, bandwidth_hz=None)
-    return check_tap(analysis, prediction, worn_hz=row["worn_hz"], setup_hz=setup).verdict
+    return check_tap(analysis, prediction, worn_hz=row["worn_hz"]).verdict
 
 
 def confusion(rows: list[dict]) -> dict:
@@ -104,6 +118,7 @@ def main(argv=None) -> int:
     ap.add_argument("--first", type=int, default=0, help="first reference index")
     ap.add_argument("--split", default="check", help="corpus split: check (held out) or infamily (the control)")
     ap.add_argument("--out", help="write every row as JSON")
+    ap.add_argument("--jobs", type=int, default=1, help="reference holders run in parallel (processes)")
     ap.add_argument("--rejudge", metavar="JSON", help="only re-evaluate saved rows with scaled and floored bands")
     args = ap.parse_args(argv)
     if args.rejudge:
@@ -115,15 +130,16 @@ def main(argv=None) -> int:
         return 0
     rows = []
     folder = tempfile.mkdtemp(prefix="bench-check-")
-    for i in range(args.first, args.first + args.n):
-        new = run_reference(i, folder, args.split)
-        rows += new
-        for r in new:
-            print(f"{r['reference']:<28} {r.get('kind', ''):<20} expected {r.get('expected', ''):<11} "
-                  f"got {r.get('verdict', r.get('failed'))}", flush=True)
-        if args.out:
-            with open(args.out, "w") as f:
-                json.dump(rows, f, indent=1)
+    indices = range(args.first, args.first + args.n)
+    with ProcessPoolExecutor(max(args.jobs, 1)) as pool:
+        for new in pool.map(run_reference, indices, [folder] * len(indices), [args.split] * len(indices)):
+            rows += new
+            for r in new:
+                print(f"{r['reference']:<28} {r.get('kind', ''):<20} expected {r.get('expected', ''):<11} "
+                      f"got {r.get('verdict', r.get('failed'))}", flush=True)
+            if args.out:
+                with open(args.out, "w") as f:
+                    json.dump(rows, f, indent=1)
     print()
     print_confusion(rows)
     return 0

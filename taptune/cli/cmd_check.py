@@ -40,6 +40,9 @@ def print_check(check, stream=None) -> None:
         dev = "—" if m.deviation_pct is None else f"{m.deviation_pct:+.2f}"
         rows.append([f"f{m.mode}", measured, f"{m.predicted_hz:.1f} ± {m.band_hz:.1f}", dev, m.status])
     print(format_table(rows, ["mode", "measured [Hz]", "predicted [Hz]", "deviation [%]", "status"]), file=stream)
+    band = check.prediction.band
+    if band is not None:
+        print(f"band: {band.text(check.prediction.bending_hz)}", file=stream)
     print(f"verdict: {_IN_WORDS[r.verdict]}", file=stream)
     for reason in r.reasons:
         print(f"  - {reason}", file=stream)

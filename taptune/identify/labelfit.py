@@ -211,6 +211,10 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
     for lab in pool:
         chosen = {m + 1: peaks[i] for m, i in enumerate(lab.modes) if i is not None}
         if not chosen:
+            # Nothing to fit: the parameters stay at the prior's centre (fit cost 0), so
+            # leaving every mode out costs its missing modes. Skipping it would hand a
+            # tap that rings only the interface to the one labeling that takes its peaks.
+            choices.append(LabelChoice(lab, lab.label_cost, tuple(map(float, expected))))
             continue
         fit, model_hz, p = quick_fit(evaluator, {m: pk.hz for m, pk in chosen.items()}, options.sigma_model)
         score = fit + level_cost(evaluator, p, chosen, options) + lab.label_cost

@@ -13,16 +13,12 @@ import hashlib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
 
 from taptune.library.schema import CheckRecord, HolderEntry, sha256_file, utc_now
 from taptune.library.store import HolderLibrary, default_library_path
 
 #: A worn, dirty or badly seated collet: both contact stiffnesses at half their value.
 WORN_FACTOR = 0.5
-#: How well a stick-out is known after clamping [mm]: read with a steel rule against the
-#: holder face, to about half a millimetre.
-STICKOUT_TOLERANCE_MM = 0.5
 
 
 @dataclass(frozen=True)
@@ -34,7 +30,6 @@ class HolderCheck:
     analysis: object  # taptune.signal.analysis.SpectrumAnalysis
     prediction: object  # taptune.identify.Prediction
     worn_hz: tuple[float, ...]
-    setup_hz: tuple[float, ...]
     record: CheckRecord
     saved: bool
     warnings: tuple[str, ...]
@@ -48,39 +43,33 @@ class HolderCheck:
         return {"verdict": self.verdict, "holder": self.holder, "file": self.analysis.file,
                 "tool": self.record.tool, "stickout": round(self.record.stickout_mm, 4),
                 **{k: v for k, v in self.result.to_dict().items() if k != "verdict"},
-                "worn_hz": [round(f, 2) for f in self.worn_hz], "setup_hz": [round(f, 2) for f in self.setup_hz],
+                "worn_hz": [round(f, 2) for f in self.worn_hz],
+                "band": None if self.prediction.band is None else self.prediction.band.to_dict(),
                 "bandwidth_hz": None if self.analysis.bandwidth_hz is None else round(self.analysis.bandwidth_hz, 1),
                 "taps": self.analysis.n_taps,
                 "saved": self.saved, "warnings": list(self.warnings)}
 
 
 def worn_prediction_hz(entry: HolderEntry, assembly, factor: float = WORN_FACTOR) -> tuple[float, ...]:
-    """Bending frequencies [Hz] of ``assembly`` with the holder's contact stiffnesses × ``factor``."""
-    from taptune.identify import predict
+    """Bending frequencies [Hz] of ``assembly`` with the holder's contact stiffnesses × ``factor``.
 
-    worn = replace(entry.params, k_tt=entry.params.k_tt * factor, k_rr=entry.params.k_rr * factor)
-    return predict([worn], assembly, entry.options()).bending_hz
-
-
-def stickout_shift_hz(entry: HolderEntry, assembly, tolerance_mm: float = STICKOUT_TOLERANCE_MM) -> tuple[float, ...]:
-    """How far each bending mode moves [Hz] when the stick-out is off by ``tolerance_mm`` (best parameters).
-
-    The larger of the two one-sided changes; a side the geometry does not allow (the tool
-    would leave the holder or reach past its bore) is left out.
+    The best parameters' prediction moved by the *smallest* wear shift, per mode, over the
+    near-optimal parameter sets: a contact that one tap pins down poorly may be stiff
+    enough that halving it hardly moves the modes, and "a worn holder would have shown"
+    must hold for every set that explains the identification equally well.
     """
-    from taptune.errors import InputError
+    import numpy as np
+
     from taptune.identify import predict
 
     options = entry.options()
-    base = np.asarray(predict([entry.params], assembly, options).bending_hz)
-    shifts = [np.zeros_like(base)]
-    for step in (-tolerance_mm, tolerance_mm):
-        try:
-            moved = assembly.with_stickout(assembly.stickout + step * 1e-3)
-        except InputError:
-            continue
-        shifts.append(np.abs(np.asarray(predict([entry.params], moved, options).bending_hz) - base))
-    return tuple(map(float, np.max(shifts, axis=0)))
+    sets = entry.prediction_sets()
+    good = np.array([predict([p], assembly, options).bending_hz for p in sets])
+    worn = np.array([predict([replace(p, k_tt=p.k_tt * factor, k_rr=p.k_rr * factor)], assembly, options).bending_hz
+                     for p in sets])
+    shift = worn - good
+    smallest = shift[np.argmin(np.abs(shift), axis=0), np.arange(shift.shape[1])]
+    return tuple(map(float, good[0] + smallest))
 
 
 def check_holder(recording, assembly, holder: str, library=None, save: bool = True, entry: HolderEntry | None = None
@@ -124,12 +113,11 @@ def check_holder(recording, assembly, holder: str, library=None, save: bool = Tr
     analysis = analyse_for_assembly(recording, assembly, params=entry.params, model_options=options)
     prediction = entry.predict(assembly)
     worn = worn_prediction_hz(entry, assembly)
-    setup = stickout_shift_hz(entry, assembly)
-    result = check_tap(analysis, prediction, worn_hz=worn, setup_hz=setup)
+    result = check_tap(analysis, prediction, worn_hz=worn)
     record = check_record(recording, assembly, result)
     if save:
         append_check(lib, entry.name, record)
-    return HolderCheck(entry.name, result, analysis, prediction, tuple(worn), setup, record, save,
+    return HolderCheck(entry.name, result, analysis, prediction, tuple(worn), record, save,
                        tuple(dict.fromkeys(warnings + list(analysis.warnings))))
 
 

@@ -47,7 +47,10 @@ def test_good_and_worn_taps_give_their_verdicts_and_grow_the_history(setup, tmp_
     assert d["verdict"] == "consistent" and d["holder"] == HOLDER_NAME and d["stickout"] == 63.5
     assert [m["mode"] for m in d["modes"]] == [1, 2, 3]
     assert {"measured_hz", "predicted_hz", "band_hz", "deviation_pct", "z"} <= set(d["modes"][0])
-    assert "verdict: consistent" in text and "predicted [Hz]" in text
+    # The band is the prediction's honest band as it stands, with its make-up.
+    assert [m["band_hz"] for m in d["modes"]] == d["band"]["half_width_hz"]
+    assert {"set", "geometry", "model_form"} == set(d["band"]["components_hz"])
+    assert "verdict: consistent" in text and "predicted [Hz]" in text and "holds the true frequency" in text
     after = _doc(lib)
     checks = after["holders"][HOLDER_NAME]["checks"]
     assert len(checks) == 1 and checks[0]["verdict"] == "consistent" and checks[0]["recording"] == good_wav.name
