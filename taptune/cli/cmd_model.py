@@ -65,7 +65,7 @@ def holder_params(args):
         except (TypeError, ValueError) as err:
             raise InputError(f"{library.path}: holder {entry.name!r} has unusable model_options ({err})") from None
         return entry.params, options, f"library holder '{entry.name}'"
-    return NOMINAL, ModelOptions(), "nominal (MODEL.md §8.1)"
+    return NOMINAL, ModelOptions(), "nominal (medians of published holders)"
 
 
 def report(result, bounds, assembly, source: str, path: str) -> str:

@@ -301,7 +301,7 @@ class MachineView(QWidget):
             self._set_label(f"<b>Machine:</b> {self.machine.name} ({self.machine.interface}) — "
                             f"{Path(self.machine.source).name}{note}")
         elif not self.machine_label.text():
-            self._set_label("Choose the machine file of the spindle (MACHINE.md): it is remembered for next time.")
+            self._set_label("Choose the machine file of the spindle (docs/machine.md): it is remembered for next time.")
         ready = self.machine is not None and self.source is not None
         self.stickout.setEnabled(ready)
         if not ready and self.result is None:
