@@ -165,7 +165,8 @@ def toolpoint_frf(assembly: Assembly, params: HolderParams, spindle, freq_hz, mo
     """
     f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
     sx, sy = _spindle_pair(spindle)
-    hs_x, hs_y = sx.at(f), (sx.at(f) if sy is sx else sy.at(f))
+    hs_x = sx.at(f)
+    hs_y = hs_x if sy is sx else sy.at(f)  # y = x: interpolate the spindle file once
     fe, p = coupled_model(assembly, params, model_options, contact, lumped)
     b = receptance_blocks(fe, p, f, method)
     gx = couple(b.h11, b.h12, b.h21, b.h22, hs_x, joint)[:, 0, 0]
