@@ -24,8 +24,6 @@ does not cover is an InputError naming the file and both ranges.
 from __future__ import annotations
 
 import math
-import os
-import secrets
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from taptune.errors import InputError
+from taptune.io.atomic import atomic_write
 from taptune.io.files import read_text
 
 SPINDLE_COLUMNS = ("f_hz", "h_wf_re", "h_wf_im", "h_wm_re", "h_wm_im", "h_tm_re", "h_tm_im")
@@ -222,19 +221,13 @@ def check_frequency_axis(path, freq_hz: np.ndarray, lines=None) -> np.ndarray:
 
 
 def _atomic_write_text(path, text: str, what: str) -> None:
-    """Write ``text`` through a temporary file in the same folder (a crash never leaves half a file)."""
-    target = Path(path)
-    # A unique name (two runs may share a folder); open() applies the umask as for any new file.
-    tmp = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.part")
+    """Write ``text`` atomically (:func:`taptune.io.atomic.atomic_write`); InputError when it cannot."""
+    def write(tmp) -> None:
+        with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        try:
-            with open(tmp, "x", encoding="utf-8", newline="\n") as fh:
-                fh.write(text)
-            os.replace(tmp, target)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
+        atomic_write(path, write)
     except OSError as err:
         raise InputError(f"{path}: cannot write the {what} ({err.strerror})") from None
 
