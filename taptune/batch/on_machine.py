@@ -20,6 +20,7 @@ from taptune.cli.cmd_lobes import write_lobes_csv
 from taptune.cli.cut import rpm_grid, tool_diameter_mm
 from taptune.errors import InputError
 from taptune.machine import stability_lobes, toolpoint_frf
+from taptune.machine.plane import same_interface
 from taptune.report.machine_page import MachineView
 
 JSON_POCKETS = 10  # the best pockets in the JSON; every speed is in the CSV
@@ -99,11 +100,8 @@ def failed_part(base: dict, title: str, message: str) -> MachinePart:
 
 
 def _warnings(assembly, machine, lobes) -> list[str]:
-    def plain(name: str) -> str:
-        return "".join(ch for ch in name.upper() if ch.isalnum())
-
     warnings = list(lobes.warnings)
-    if plain(machine.interface) != plain(assembly.holder.interface):
+    if not same_interface(machine.interface, assembly.holder.interface):
         warnings.append(f"the machine's interface {machine.interface!r} differs from the holder's "
                         f"{assembly.holder.interface!r}")
     if machine.y_from_x:

@@ -100,6 +100,7 @@ def machine_inputs(args, what: str):
     from taptune.errors import InputError
     from taptune.io.assembly import load_assembly
     from taptune.io.machine import load_machine
+    from taptune.machine.plane import same_interface
 
     if not (args.holder or args.params):
         raise InputError(f"{what}: give --holder NAME (a library holder) or --params JSON for the holder model")
@@ -112,16 +113,12 @@ def machine_inputs(args, what: str):
     if args.holder and assembly.holder.name != holder.name:
         warnings.append(f"{args.assembly}: its holder is '{assembly.holder.name}', using the contact of library "
                         f"holder '{holder.name}'")
-    if _plain(machine.interface) != _plain(assembly.holder.interface):
+    if not same_interface(machine.interface, assembly.holder.interface):
         warnings.append(f"{args.machine}: interface {machine.interface!r} differs from the holder's "
                         f"{assembly.holder.interface!r} ({args.assembly})")
     if machine.y_from_x:
         warnings.append(f"{args.machine}: no [spindle] y; the x receptance is used for y")
     return assembly, machine, holder, warnings
-
-
-def _plain(name: str) -> str:
-    return "".join(ch for ch in name.upper() if ch.isalnum())
 
 
 def toolpoint_frfs(assembly, machine, holder: HolderInput, freq_hz, stickouts_mm=None, contact="distributed"):

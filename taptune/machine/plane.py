@@ -48,6 +48,15 @@ def _interface_key(name: str) -> str | None:
     return f"HSK-A{int(m.group(2))}"
 
 
+def same_interface(a: str, b: str) -> bool:
+    """Whether two interface names agree ignoring case, spaces and punctuation
+    (the machine file's and the holder's; a mismatch is only warned about)."""
+    def plain(name: str) -> str:
+        return "".join(ch for ch in name.upper() if ch.isalnum())
+
+    return plain(a) == plain(b)
+
+
 def shank_length(interface: str) -> float | None:
     """Taper shank length of a known interface [m], or None."""
     key = _interface_key(interface)

@@ -87,3 +87,11 @@ def test_holder_only_file(tmp_path):
     assert cut_holder(h).length == pytest.approx(0.1)
     with pytest.raises(InputError, match=r"dummy.toml: \[holder\] segments\[1\].od must be > 0"):
         parse_holder({"holder": {"name": "d", "clamp_length": 1, "segments": [{"length": 1, "od": 0}]}}, "dummy.toml")
+
+
+def test_same_interface_ignores_case_spaces_and_punctuation():
+    """The machine-vs-holder interface check of toolpoint, lobes and batch."""
+    from taptune.machine.plane import same_interface
+
+    assert same_interface("HSK-A63", "hsk a63") and same_interface("SK40", "sk 40")
+    assert not same_interface("HSK-A63", "HSK-A100")
