@@ -135,8 +135,11 @@ def rpm_grid(rpm, freq_hz, gxx, gyy, teeth: int, max_rpm: float | None):
         lo, hi, step = rpm
         try:
             return uniform_grid(lo, hi, step)
-        except InputError:
-            raise InputError(f"--rpm {lo:g} {hi:g} {step:g}: needs 0 < MIN < MAX and STEP > 0 (rpm)") from None
+        except InputError as err:
+            ordered = 0 < lo < hi and step > 0 and np.isfinite(rpm).all()
+            # The grid's own message for an ordered but too fine grid; the bounds in rpm words otherwise.
+            why = str(err).replace("frequency grid", "speed grid") if ordered else "needs 0 < MIN < MAX and STEP > 0 (rpm)"
+            raise InputError(f"--rpm {lo:g} {hi:g} {step:g}: {why}") from None
     if max_rpm is None:
         modes = dominant_modes(freq_hz, gxx, "x") + dominant_modes(freq_hz, gyy, "y")
         f_top = max(modes, key=lambda m: m.magnitude).hz if modes else float(freq_hz[np.argmax(np.abs(gxx))])

@@ -228,6 +228,8 @@ def test_lobes_bad_inputs_end_in_one_line(tmp_path, capsys):
         capsys, "lobes", "--frf", good, "--diameter", 10, "--teeth", 4, "--ae", 5, "--milling", "up", "--material", "unobtainium")
     assert "exceeds the tool diameter" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 4, *cut)
     assert "--rpm 500 100 10" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 500, 100, 10)
+    err = one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 100, 1e9, 0.01)
+    assert "--rpm 100 1e+09 0.01" in err and "too fine" in err  # not "needs 0 < MIN < MAX"
     assert "--frf CSV" in one_line_error(capsys, "lobes", *cut)
 
 
