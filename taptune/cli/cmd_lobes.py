@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 
 from taptune.cli.cmd_toolpoint import add_holder_args, add_model_args
-from taptune.cli.cut import add_cut_args, cutting_coefficients, rpm_grid, tool_diameter_mm
+from taptune.cli.cut import add_cut_args, cut_options, rpm_grid, tool_diameter_mm
 
 
 def add_parser(sub, name, help_text):
@@ -70,27 +70,22 @@ def run(args) -> int:
 
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.plot, "plot")):
         output_path(path, what)
-    if args.teeth < 1:
-        raise InputError(f"--teeth must be >= 1, got {args.teeth}")
-    ktc, krc, coefficients = cutting_coefficients(args)
+    cut = cut_options(args)  # the whole cut checked before the tool-point FRF is computed
     if args.frf and args.diameter is None:
         raise InputError("--frf needs --diameter MM (the tool diameter)")
     freq, gxx, gyy, source, tool_diameter_mm, max_rpm, warnings = frf_input(args)
-    diameter = args.diameter if args.diameter is not None else tool_diameter_mm
-    rpm = rpm_grid(args.rpm, freq, gxx, gyy, args.teeth, max_rpm)
-    lobes = stability_lobes(freq, gxx, gyy, teeth=args.teeth, ktc=ktc, krc=krc, diameter=diameter * 1e-3,
-                            ae=args.ae * 1e-3, milling=args.milling, rpm=rpm)
+    diameter = cut.diameter_mm if cut.diameter_mm is not None else tool_diameter_mm
+    rpm = rpm_grid(cut.rpm, freq, gxx, gyy, cut.teeth, max_rpm)
+    lobes = stability_lobes(freq, gxx, gyy, teeth=cut.teeth, ktc=cut.ktc, krc=cut.krc, diameter=diameter * 1e-3,
+                            ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm)
     warnings += [w for w in lobes.warnings if w not in warnings]
     out = lobes.to_dict()
-    cut = {"teeth": args.teeth, "ktc_mpa": ktc / 1e6, "krc_mpa": krc / 1e6, "diameter_mm": diameter,
-           "ae_mm": args.ae, "milling": args.milling, "material": args.material}
-    out.update(source=source, cut=cut, warnings=warnings)
+    out.update(source=source, cut=cut.to_dict(diameter), warnings=warnings)
     write_json(out, args.json)
     if args.csv:
         write_lobes_csv(args.csv, out)
     if args.json != "-":
-        kind = "slotting" if args.ae >= diameter * (1 - 1e-9) else f"{args.milling}-milling, ae {args.ae:g} mm"
-        print(f"FRF:  {source}\ncut:  {args.teeth} teeth, Ø{diameter:g} mm, {kind}; {coefficients}")
+        print(f"FRF:  {source}\ncut:  {cut.describe(diameter)}")
         print(f"critical depth (stable at every speed): {out['a_crit_mm']:.3g} mm  "
               f"[{rpm[0]:g}–{rpm[-1]:g} rpm]")
         rows = [[f"{p['rpm']:.0f}", f"{p['a_lim_mm']:.3g}", _chatter_at(out, p["rpm"])] for p in out["pockets"][:5]]
@@ -103,7 +98,7 @@ def run(args) -> int:
 
         plot_lobes(lobes.rpm, [a if a is not None else float("nan") for a in out["a_lim_mm"]], out["a_crit_mm"],
                    out["pockets"], args.plot, chatter_hz=lobes.chatter_hz,
-                   title=f"{source}\n{args.teeth} teeth, Ø{diameter:g} mm, ae {args.ae:g} mm {args.milling}; {coefficients}")
+                   title=f"{source}\n{cut.teeth} teeth, Ø{diameter:g} mm, ae {cut.ae_mm:g} mm {cut.milling}; {cut.coefficients}")
     return 0
 
 
