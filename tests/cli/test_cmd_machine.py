@@ -231,6 +231,9 @@ def test_lobes_bad_inputs_end_in_one_line(tmp_path, capsys):
     err = one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 100, 1e9, 0.01)
     assert "--rpm 100 1e+09 0.01" in err and "too fine" in err  # not "needs 0 < MIN < MAX"
     assert "--frf CSV" in one_line_error(capsys, "lobes", *cut)
+    # The cut is checked before the tool-point FRF is built, in the option's words.
+    assert "--ae must be > 0 mm" in one_line_error(capsys, "lobes", *DEMO, "--teeth", 4, "--ktc", 902, "--krc", 243,
+                                                   "--ae", -1, "--milling", "down")
 
 
 # --------------------------------------------------------------------------- spindle
