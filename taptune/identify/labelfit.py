@@ -156,6 +156,12 @@ def level_cost(evaluator, p, peaks_by_mode: dict, options: "LabelFitOptions") ->
     return float(np.sum((r / options.sigma_level_db) ** 2))
 
 
+def labelled_modes(peaks, n: int) -> list:
+    """Index of the peak labelled bending mode 1..n (None where no peak is)."""
+    return [next((i for i, p in enumerate(peaks) if p.kind == "bending" and p.mode == m + 1), None)
+            for m in range(n)]
+
+
 def _describe(lab: Labeling, peaks) -> str:
     parts = [f"mode {m + 1} = {peaks[i].hz:.0f} Hz" if i is not None else f"mode {m + 1} unassigned"
              for m, i in enumerate(lab.modes)]
@@ -187,8 +193,7 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
     peaks = analysis.peaks
     stat, grown = label_candidates(peaks)
     cand = [not s and not g for s, g in zip(stat, grown)]
-    current = tuple(next((i for i, p in enumerate(peaks) if p.kind == "bending" and p.mode == m + 1), None)
-                    for m in range(len(expected)))
+    current = tuple(labelled_modes(peaks, len(expected)))
     ranked = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
                               options=label_options, keep=options.keep)
     loud = [i for i, p in enumerate(peaks) if cand[i] and p.prominence_db >= label_options.loud_prominence_db
@@ -242,9 +247,12 @@ def relabelled(analysis, modes, warnings, bands=(), refine=None):
     peaks = analysis.peaks
     stat, grown = label_candidates(peaks)
     old = {i for i, p in enumerate(peaks) if p.kind == "bending"}
+    old_modes = labelled_modes(peaks, len(modes))
     out = apply_labels(peaks, modes, bands, stationary=stat, grown=grown, source="fit")
     new = [i for i in modes if i is not None and i not in old]
     if new and refine is not None:
         out = refine(out, new)
-    kept = [w for w in analysis.warnings if not w.startswith(("only ", "no bending peak found"))]
+    # The old labels' missing-mode warning, exactly as the labels wrote it, gives way to the new one's.
+    stale = set(missing_warnings(old_modes, len(modes)))
+    kept = [w for w in analysis.warnings if w not in stale]
     return replace(analysis, peaks=out, warnings=kept + missing_warnings(modes, len(modes)) + list(warnings))

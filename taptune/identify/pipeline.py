@@ -60,7 +60,7 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
     False keeps the guidance's choice). Extra keyword arguments go to
     :func:`taptune.signal.analysis.analyse_recording`.
     """
-    from taptune.identify.labelfit import choose_labeling, relabelled
+    from taptune.identify.labelfit import choose_labeling, labelled_modes, relabelled
     from taptune.signal.analysis import SpectrumOptions, analyse_recording
 
     if assembly is None:
@@ -83,9 +83,7 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
                                       spectrum_options.labels)
     if modes is None:
         return analysis
-    current = [next((i for i, p in enumerate(analysis.peaks) if p.kind == "bending" and p.mode == m + 1), None)
-               for m in range(len(modes))]
-    if modes == current:
+    if modes == labelled_modes(analysis.peaks, len(modes)):
         return replace(analysis, warnings=list(analysis.warnings) + warnings) if warnings else analysis
     return relabelled(analysis, modes, warnings, analysis.excluded_bands_hz,
                       refine=_full_refinement(recording, spectrum_options))
