@@ -75,9 +75,10 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
 
     def evaluator():
         from taptune.model import ModelOptions
-        from taptune.model.reduced import FastEvaluator
+        from taptune.model.reduced import cached_evaluator
 
-        return FastEvaluator(assembly, model_options or ModelOptions())
+        # The one the identification then fits with (built once for both).
+        return cached_evaluator(assembly, model_options or ModelOptions())
 
     modes, warnings = choose_labeling(analysis, evaluator, guidance, analysis.excluded_bands_hz,
                                       spectrum_options.labels)
