@@ -20,15 +20,20 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from taptune.model.params import NOMINAL, P_LOWER, P_UPPER, to_p
+from taptune.model.params import NAMES, NOMINAL, P_LOWER, P_UPPER, to_p
 from taptune.signal.labels import (LabelOptions, Labeling, apply_labels, label_candidates,
                                    missing_warnings, ranked_labelings)
 
-#: Frequency-setting parameters (indices into p, MODEL.md §8.1) and their prior spread:
-#: the published holders lie within about one spread of the nominal values (k_tt and
-#: k_rr in decades, alpha in %, the factors absolute). The loss intensities hardly move
-#: the frequencies and stay nominal.
-PRIOR_SPREAD = ((0, 0.5), (1, 1.0), (4, 15.0), (5, 0.03), (6, 0.05))
+#: Plausible spread of each frequency-setting holder parameter around the nominal
+#: values (MODEL.md §8.1): (name, step); k_tt and k_rr in decades, alpha in %, the
+#: factors absolute. The published holders lie within about one spread. The labels'
+#: guidance uses how far each bending mode moves per spread
+#: (:func:`taptune.identify.pipeline.model_expectation`); the fit here, as its prior.
+#: The loss intensities hardly move the frequencies and stay nominal.
+PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
+                    ("density_factor", 0.03), ("alpha", 15.0))
+#: The same as (index into p, spread), in the order of p.
+PRIOR_SPREAD = tuple(sorted((NAMES.index(name), step) for name, step in PARAMETER_SPREAD))
 
 
 @dataclass(frozen=True)

@@ -11,14 +11,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from taptune.identify.labelfit import PARAMETER_SPREAD
 from taptune.model.params import NOMINAL, HolderParams
-
-
-#: Plausible spread of each holder parameter around the nominal values (MODEL.md §8.1):
-#: (name, step); k_tt and k_rr in decades. The labels use how far each bending mode
-#: moves per spread.
-PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
-                    ("density_factor", 0.03), ("alpha", 15.0))
 
 
 def model_expectation(assembly, params: HolderParams | None = None, model_options=None):
