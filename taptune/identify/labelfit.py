@@ -22,7 +22,7 @@ import numpy as np
 
 from taptune.model.params import NAMES, NOMINAL, P_LOWER, P_UPPER, to_p
 from taptune.signal.labels import (LabelOptions, Labeling, apply_labels, label_candidates,
-                                   missing_warnings, ranked_labelings)
+                                   loud_peaks, missing_warnings, ranked_labelings)
 
 #: Plausible spread of each frequency-setting holder parameter around the nominal
 #: values (MODEL.md §8.1): (name, step); k_tt and k_rr in decades, alpha in %, the
@@ -201,8 +201,8 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
     current = tuple(labelled_modes(peaks, len(expected)))
     ranked = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
                               options=label_options, keep=options.keep)
-    loud = [i for i, p in enumerate(peaks) if cand[i] and p.prominence_db >= label_options.loud_prominence_db
-            and p.level_db >= label_options.loud_level_db]
+    # Loud peaks inside the interface bands too (no bands given): the fit judges them.
+    loud = [i for i, is_loud in enumerate(loud_peaks(peaks, cand, (), label_options)) if is_loud]
     extra = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
                              options=label_options, keep=1, must_try=loud)[1:]
     if not ranked:
