@@ -41,6 +41,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# Modes closer than EDGE_MARGIN (relative) below the recording's bandwidth are not
+# trusted: a codec's transition band bends their peaks (the analysis' own rule).
+from taptune.signal.bandwidth import EDGE_MARGIN
+
 #: The measured peaks are known to 0.05 % at best (MODEL.md §8.3), whatever their scatter.
 MEASUREMENT_FLOOR = 5e-4
 #: The band's half-width in standard deviations of the prediction error: it holds the
@@ -48,9 +52,6 @@ MEASUREMENT_FLOOR = 5e-4
 Z_BAND = 1.645
 #: |z| above this: clearly outside (about twice the band when σ is small).
 Z_OUTSIDE = 3.0
-#: Modes closer than this (relative) below the recording's bandwidth are not trusted
-#: (a codec's transition band bends their peaks; signal.bandwidth.EDGE_MARGIN).
-EDGE_MARGIN = 0.03
 
 VERDICTS = ("consistent", "differs", "inconclusive")
 

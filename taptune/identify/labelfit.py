@@ -20,15 +20,20 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from taptune.model.params import NOMINAL, P_LOWER, P_UPPER, to_p
+from taptune.model.params import NAMES, NOMINAL, P_LOWER, P_UPPER, to_p
 from taptune.signal.labels import (LabelOptions, Labeling, apply_labels, label_candidates,
-                                   missing_warnings, ranked_labelings)
+                                   loud_peaks, missing_warnings, ranked_labelings)
 
-#: Frequency-setting parameters (indices into p, MODEL.md §8.1) and their prior spread:
-#: the published holders lie within about one spread of the nominal values (k_tt and
-#: k_rr in decades, alpha in %, the factors absolute). The loss intensities hardly move
-#: the frequencies and stay nominal.
-PRIOR_SPREAD = ((0, 0.5), (1, 1.0), (4, 15.0), (5, 0.03), (6, 0.05))
+#: Plausible spread of each frequency-setting holder parameter around the nominal
+#: values (MODEL.md §8.1): (name, step); k_tt and k_rr in decades, alpha in %, the
+#: factors absolute. The published holders lie within about one spread. The labels'
+#: guidance uses how far each bending mode moves per spread
+#: (:func:`taptune.identify.pipeline.model_expectation`); the fit here, as its prior.
+#: The loss intensities hardly move the frequencies and stay nominal.
+PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
+                    ("density_factor", 0.03), ("alpha", 15.0))
+#: The same as (index into p, spread), in the order of p.
+PRIOR_SPREAD = tuple(sorted((NAMES.index(name), step) for name, step in PARAMETER_SPREAD))
 
 
 @dataclass(frozen=True)
@@ -156,6 +161,12 @@ def level_cost(evaluator, p, peaks_by_mode: dict, options: "LabelFitOptions") ->
     return float(np.sum((r / options.sigma_level_db) ** 2))
 
 
+def labelled_modes(peaks, n: int) -> list:
+    """Index of the peak labelled bending mode 1..n (None where no peak is)."""
+    return [next((i for i, p in enumerate(peaks) if p.kind == "bending" and p.mode == m + 1), None)
+            for m in range(n)]
+
+
 def _describe(lab: Labeling, peaks) -> str:
     parts = [f"mode {m + 1} = {peaks[i].hz:.0f} Hz" if i is not None else f"mode {m + 1} unassigned"
              for m, i in enumerate(lab.modes)]
@@ -187,12 +198,11 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
     peaks = analysis.peaks
     stat, grown = label_candidates(peaks)
     cand = [not s and not g for s, g in zip(stat, grown)]
-    current = tuple(next((i for i, p in enumerate(peaks) if p.kind == "bending" and p.mode == m + 1), None)
-                    for m in range(len(expected)))
+    current = tuple(labelled_modes(peaks, len(expected)))
     ranked = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
                               options=label_options, keep=options.keep)
-    loud = [i for i, p in enumerate(peaks) if cand[i] and p.prominence_db >= label_options.loud_prominence_db
-            and p.level_db >= label_options.loud_level_db]
+    # Loud peaks inside the interface bands too (no bands given): the fit judges them.
+    loud = [i for i, is_loud in enumerate(loud_peaks(peaks, cand, (), label_options)) if is_loud]
     extra = ranked_labelings(peaks, expected, bounds, bands, candidates=cand, spread_hz=spread,
                              options=label_options, keep=1, must_try=loud)[1:]
     if not ranked:
@@ -242,9 +252,12 @@ def relabelled(analysis, modes, warnings, bands=(), refine=None):
     peaks = analysis.peaks
     stat, grown = label_candidates(peaks)
     old = {i for i, p in enumerate(peaks) if p.kind == "bending"}
+    old_modes = labelled_modes(peaks, len(modes))
     out = apply_labels(peaks, modes, bands, stationary=stat, grown=grown, source="fit")
     new = [i for i in modes if i is not None and i not in old]
     if new and refine is not None:
         out = refine(out, new)
-    kept = [w for w in analysis.warnings if not w.startswith(("only ", "no bending peak found"))]
+    # The old labels' missing-mode warning, exactly as the labels wrote it, gives way to the new one's.
+    stale = set(missing_warnings(old_modes, len(modes)))
+    kept = [w for w in analysis.warnings if w not in stale]
     return replace(analysis, peaks=out, warnings=kept + missing_warnings(modes, len(modes)) + list(warnings))

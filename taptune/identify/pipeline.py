@@ -11,14 +11,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from taptune.identify.labelfit import PARAMETER_SPREAD
 from taptune.model.params import NOMINAL, HolderParams
-
-
-#: Plausible spread of each holder parameter around the nominal values (MODEL.md §8.1):
-#: (name, step); k_tt and k_rr in decades. The labels use how far each bending mode
-#: moves per spread.
-PARAMETER_SPREAD = (("k_tt", 0.5), ("k_rr", 1.0), ("modulus_factor", 0.05),
-                    ("density_factor", 0.03), ("alpha", 15.0))
 
 
 def model_expectation(assembly, params: HolderParams | None = None, model_options=None):
@@ -60,7 +54,7 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
     False keeps the guidance's choice). Extra keyword arguments go to
     :func:`taptune.signal.analysis.analyse_recording`.
     """
-    from taptune.identify.labelfit import choose_labeling, relabelled
+    from taptune.identify.labelfit import choose_labeling, labelled_modes, relabelled
     from taptune.signal.analysis import SpectrumOptions, analyse_recording
 
     if assembly is None:
@@ -75,17 +69,16 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
 
     def evaluator():
         from taptune.model import ModelOptions
-        from taptune.model.reduced import FastEvaluator
+        from taptune.model.reduced import cached_evaluator
 
-        return FastEvaluator(assembly, model_options or ModelOptions())
+        # The one the identification then fits with (built once for both).
+        return cached_evaluator(assembly, model_options or ModelOptions())
 
     modes, warnings = choose_labeling(analysis, evaluator, guidance, analysis.excluded_bands_hz,
                                       spectrum_options.labels)
     if modes is None:
         return analysis
-    current = [next((i for i, p in enumerate(analysis.peaks) if p.kind == "bending" and p.mode == m + 1), None)
-               for m in range(len(modes))]
-    if modes == current:
+    if modes == labelled_modes(analysis.peaks, len(modes)):
         return replace(analysis, warnings=list(analysis.warnings) + warnings) if warnings else analysis
     return relabelled(analysis, modes, warnings, analysis.excluded_bands_hz,
                       refine=_full_refinement(recording, spectrum_options))

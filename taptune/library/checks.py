@@ -60,13 +60,18 @@ def worn_prediction_hz(entry: HolderEntry, assembly, factor: float = WORN_FACTOR
     """
     import numpy as np
 
-    from taptune.identify import predict
+    from taptune.model import build_model, solve_modes
 
-    options = entry.options()
+    # Only the frequencies: one model serves every set (a full prediction per set would
+    # rebuild it and compute a band that is thrown away).
+    fe = build_model(assembly, entry.options())
+
+    def bending_hz(p):
+        return np.asarray(solve_modes(fe, p, n_modes=3).frequency_hz[:3], dtype=float)
+
     sets = entry.prediction_sets()
-    good = np.array([predict([p], assembly, options).bending_hz for p in sets])
-    worn = np.array([predict([replace(p, k_tt=p.k_tt * factor, k_rr=p.k_rr * factor)], assembly, options).bending_hz
-                     for p in sets])
+    good = np.array([bending_hz(p) for p in sets])
+    worn = np.array([bending_hz(replace(p, k_tt=p.k_tt * factor, k_rr=p.k_rr * factor)) for p in sets])
     shift = worn - good
     smallest = shift[np.argmin(np.abs(shift), axis=0), np.arange(shift.shape[1])]
     return tuple(map(float, good[0] + smallest))

@@ -217,7 +217,7 @@ class Labeling:
         return self.cost - self.prior
 
 
-def _loud(peaks: list[Peak], ok, bands, options: LabelOptions) -> list[bool]:
+def loud_peaks(peaks: list[Peak], ok, bands, options: LabelOptions) -> list[bool]:
     """Peaks too loud to leave unexplained: clear, outside the interface bands, candidates."""
     return [bool(ok[i]) and not in_bands(p.hz, bands) and p.prominence_db >= options.loud_prominence_db
             and p.level_db >= options.loud_level_db for i, p in enumerate(peaks)]
@@ -255,7 +255,7 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
         sigma = options.sigma_mode
     ok = [True] * len(peaks) if candidates is None else list(candidates)
     hz = np.array([p.hz for p in peaks])
-    loud = _loud(peaks, ok, bands, options)
+    loud = loud_peaks(peaks, ok, bands, options)
     per_mode = []
     for m in range(n):
         idx = [i for i in range(len(peaks)) if ok[i] and bnd[m, 0] <= hz[i] <= bnd[m, 1]]

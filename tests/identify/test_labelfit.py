@@ -50,3 +50,29 @@ def test_weak_mode_2_on_the_skirt_of_the_interface_mode_is_labelled_by_the_fit()
     assert all(abs(found[m] / truth[m - 1] - 1) < 1e-3 for m in found)
     assert any("labels were ambiguous" in w and "9602 Hz" in w for w in decided.warnings)
     assert decided.peaks[[p.mode for p in decided.peaks].index(2)].note == "bending (fit), inside the interface band"
+
+
+def test_relabelled_replaces_only_the_missing_mode_warning():
+    """The old labels' missing-mode warning gives way to the new one's; other warnings stay."""
+    from dataclasses import dataclass
+
+    from taptune.identify.labelfit import relabelled
+    from taptune.signal.peaks import Peak
+
+    @dataclass(frozen=True)
+    class Analysis:
+        peaks: list
+        warnings: list
+        file: str = "tap.wav"
+
+    peaks = [Peak(4500.0, -3.0, kind="bending", mode=1, prominence_db=30.0),
+             Peak(9000.0, -20.0, kind="other", prominence_db=25.0),
+             Peak(15000.0, -6.0, kind="bending", mode=3, prominence_db=28.0)]
+    other = "only the first tap is clean (a made-up warning that is not about the modes)"
+    before = Analysis(peaks, ["only 2 of 3 bending modes found (missing mode 2)", other])
+    after = relabelled(before, [0, 1, 2], ["chose mode 2 = 9000 Hz"])
+    assert [p.mode for p in after.peaks] == [1, 2, 3]
+    assert after.peaks[1].note == "bending (fit)"
+    assert after.warnings == [other, "chose mode 2 = 9000 Hz"]
+    fewer = relabelled(before, [0, None, None], [])
+    assert fewer.warnings == [other, "only 1 of 3 bending modes found (missing mode 2, 3)"]
