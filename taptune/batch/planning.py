@@ -208,14 +208,24 @@ def _library_entries(options: BatchOptions) -> dict:
     return HolderLibrary(default_library_path(options.library)).entries()
 
 
+def _protect_library(items: Sequence[Item], options: BatchOptions) -> None:
+    """Refuse up front a result JSON that would land on the holder library file (even with
+    --no-save: ``holders.wav`` with ``--out`` the library's folder would replace the library)."""
+    library = default_library_path(options.library).resolve()
+    for item in items:
+        if item.json_path.resolve() == library:
+            raise InputError(f"{item.json_path}: is the holder library; the result of {item.path} would "
+                             "overwrite it; choose another --out folder")
+
+
 def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: str | None = None) -> Plan:
     """Discover, pair, hash and group the recordings; decide what is skipped or cannot run.
 
     Raises
     ------
     InputError
-        No recording found at all, an ``assembly`` file that cannot be used, or a
-        library file that does not validate.
+        No recording found at all, an ``assembly`` file that cannot be used, a result
+        JSON that would overwrite the library file, or a library file that does not validate.
     """
     if assembly is not None:
         load_assembly(assembly)  # a bad --assembly concerns every file: bad input up front, exit 2
@@ -223,6 +233,7 @@ def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: st
     if not files and not rows:
         raise InputError(f"no .wav or .flac recording under {', '.join(map(str, paths))}")
     items, bad = _prepare(files, assembly, Path(options.out_dir))
+    _protect_library(items, options)
     rows += bad
     entries = _library_entries(options) if options.save and not options.force else {}
     jobs = []
