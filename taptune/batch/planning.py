@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -84,7 +85,7 @@ def result_names(files: Sequence[Path]) -> dict[Path, Path]:
     root = Path(os.path.commonpath([r.parent for r in resolved]))
     rel = [r.relative_to(root) for r in resolved]
     stems = [r.with_suffix("") for r in rel]
-    clashes = {s for s in stems if stems.count(s) > 1}
+    clashes = {s for s, n in Counter(stems).items() if n > 1}
     return {
         f: (r.with_name(r.name + ".json") if s in clashes else s.with_name(s.name + ".json"))
         for f, r, s in zip(files, rel, stems)
