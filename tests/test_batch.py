@@ -158,6 +158,21 @@ def test_plan_with_nothing_to_do_is_bad_input(tmp_path):
         plan([tmp_path], BatchOptions(out_dir=tmp_path / "out"))
 
 
+def test_a_result_that_would_overwrite_the_library_is_refused_before_any_work(tmp_path):
+    # holders.wav's result JSON is out/holders.json: the library itself when --out is its folder.
+    (tmp_path / "rec").mkdir()
+    (tmp_path / "rec" / "holders.wav").write_bytes(b"x")
+    (tmp_path / "rec" / "holders.toml").write_text(assembly_text())
+    library = tmp_path / "out" / "holders.json"
+    library.parent.mkdir()
+    library.write_bytes(b"saved holders")
+    for save in (True, False):
+        options = BatchOptions(out_dir=tmp_path / "out", library=str(library), save=save)
+        with pytest.raises(InputError, match="is the holder library"):
+            plan([tmp_path / "rec"], options)
+    assert library.read_bytes() == b"saved holders"
+
+
 def test_joint_plan_groups_by_holder_name(tmp_path):
     for stem, holder in (("a1", "A"), ("b1", "B"), ("a2", "A")):
         (tmp_path / f"{stem}.wav").write_bytes(b"x")

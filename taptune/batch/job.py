@@ -77,7 +77,7 @@ def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCall
     except Exception as err:  # noqa: BLE001 - reported as status "error", traceback to errors.log
         log_error(out_dir, group, err)
         return Outcome(tuple(rows + rows_for(group, "error", one_line(err), time.perf_counter() - t0)))
-    pages = _pages(result, analyses, recordings, assemblies, id_options.model, out_dir) if options.keep_pages else ()
+    pages = _pages(result, analyses, recordings, group, id_options.model, out_dir) if options.keep_pages else ()
     if pages and options.machine is not None:
         pages = tuple(replace(page, machine=part.view) for page, part in zip(pages, parts))
     return Outcome(tuple(rows + done), pages)
@@ -108,14 +108,17 @@ def _ok_row(item: Item, view, seconds: float, data: dict, part: MachinePart | No
                best_pocket_rpm=best[0], best_pocket_a_lim_mm=best[1])
 
 
-def _pages(result, analyses, recordings, assemblies, model_options, out_dir: Path) -> tuple:
+def _pages(result, analyses, recordings, items: Sequence[Item], model_options, out_dir: Path) -> tuple:
     """Report pages of a finished identification; none (and a log entry) if they cannot be made.
+
+    The recordings' hashes come from planning (each file is hashed once per batch).
 
     The identification itself is stored and written by then: a report problem must not
     turn it into a failure.
     """
     try:
-        return tuple(report_pages(result, [_slim(a) for a in analyses], recordings, assemblies, model_options))
+        return tuple(report_pages(result, [_slim(a) for a in analyses], recordings, [i.assembly for i in items],
+                                  model_options, sha256s=[i.sha256 for i in items]))
     except Exception as err:  # noqa: BLE001 - logged; the summary page still lists the recording
         log_error(out_dir, [SimpleNamespace(path=r.path) for r in recordings], err)
         return ()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -84,7 +85,7 @@ def result_names(files: Sequence[Path]) -> dict[Path, Path]:
     root = Path(os.path.commonpath([r.parent for r in resolved]))
     rel = [r.relative_to(root) for r in resolved]
     stems = [r.with_suffix("") for r in rel]
-    clashes = {s for s in stems if stems.count(s) > 1}
+    clashes = {s for s, n in Counter(stems).items() if n > 1}
     return {
         f: (r.with_name(r.name + ".json") if s in clashes else s.with_name(s.name + ".json"))
         for f, r, s in zip(files, rel, stems)
@@ -208,14 +209,24 @@ def _library_entries(options: BatchOptions) -> dict:
     return HolderLibrary(default_library_path(options.library)).entries()
 
 
+def _protect_library(items: Sequence[Item], options: BatchOptions) -> None:
+    """Refuse up front a result JSON that would land on the holder library file (even with
+    --no-save: ``holders.wav`` with ``--out`` the library's folder would replace the library)."""
+    library = default_library_path(options.library).resolve()
+    for item in items:
+        if item.json_path.resolve() == library:
+            raise InputError(f"{item.json_path}: is the holder library; the result of {item.path} would "
+                             "overwrite it; choose another --out folder")
+
+
 def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: str | None = None) -> Plan:
     """Discover, pair, hash and group the recordings; decide what is skipped or cannot run.
 
     Raises
     ------
     InputError
-        No recording found at all, an ``assembly`` file that cannot be used, or a
-        library file that does not validate.
+        No recording found at all, an ``assembly`` file that cannot be used, a result
+        JSON that would overwrite the library file, or a library file that does not validate.
     """
     if assembly is not None:
         load_assembly(assembly)  # a bad --assembly concerns every file: bad input up front, exit 2
@@ -223,6 +234,7 @@ def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: st
     if not files and not rows:
         raise InputError(f"no .wav or .flac recording under {', '.join(map(str, paths))}")
     items, bad = _prepare(files, assembly, Path(options.out_dir))
+    _protect_library(items, options)
     rows += bad
     entries = _library_entries(options) if options.save and not options.force else {}
     jobs = []

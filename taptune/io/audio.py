@@ -210,6 +210,8 @@ def _read_av(p: Path, name: str):
                 what = "a video without sound" if container.streams.video else "no audio stream"
                 raise InputError(f"{name}: {what}; nothing to analyse")
             stream = container.streams.audio[0]
+            if stream.codec_context is None:  # FFmpeg has no decoder for what the header names
+                raise InputError(f"{name}: not a readable audio file (unknown audio codec; the file may be corrupt)")
             # FFmpeg names its floating-point MP3 decoder "mp3float"; the codec is MP3.
             codec = {"mp3float": "mp3"}.get(stream.codec_context.name, stream.codec_context.name)
             chunks, rate, fmt = [], None, None

@@ -147,6 +147,13 @@ def _text(value, src: str, key: str, max_len: int = 1000) -> str:
     return value
 
 
+def _list(value, src: str, key: str, of: str = "") -> list:
+    """``value`` as a JSON list; ``of`` says of what, for the message (" of frequencies")."""
+    if not isinstance(value, list):
+        _fail(src, key, f"must be a list{of}, got {_kind(value)}")
+    return value
+
+
 def _sha256(value, src: str, key: str) -> str:
     if not isinstance(value, str) or not _SHA256.match(value):
         _fail(src, key, f"must be 64 lower-case hex digits, got {value!r}")
@@ -155,9 +162,8 @@ def _sha256(value, src: str, key: str) -> str:
 
 def _frequencies(value, src: str, key: str) -> tuple[float | None, ...]:
     """Bending frequencies f1, f2, … [Hz]: numbers > 0, or null for a mode not measured."""
-    if not isinstance(value, list):
-        _fail(src, key, f"must be a list of frequencies (numbers or null), got {_kind(value)}")
-    return tuple(None if v is None else _number(v, src, f"{key}[{i}]", 0.0) for i, v in enumerate(value))
+    values = _list(value, src, key, " of frequencies (numbers or null)")
+    return tuple(None if v is None else _number(v, src, f"{key}[{i}]", 0.0) for i, v in enumerate(values))
 
 
 def _as_frequencies(values) -> tuple[float | None, ...]:
@@ -490,10 +496,8 @@ class CheckRecord:
         sha = _sha256(d["sha256"], source, f"{key}.sha256")
         if d["verdict"] not in cls.VERDICTS:
             _fail(source, f"{key}.verdict", f"must be one of {', '.join(cls.VERDICTS)}, got {d['verdict']!r}")
-        if not isinstance(d["modes"], list):
-            _fail(source, f"{key}.modes", f"must be a list, got {_kind(d['modes'])}")
         modes = []
-        for i, m in enumerate(d["modes"]):
+        for i, m in enumerate(_list(d["modes"], source, f"{key}.modes")):
             k = f"{key}.modes[{i}]"
             m = _object(m, source, k, ("mode", "measured_hz", "predicted_hz", "band_hz"))
             measured = m["measured_hz"]
@@ -593,22 +597,16 @@ class HolderEntry:
     def from_dict(cls, data, source: str = "<library>") -> "HolderEntry":
         """Validated entry from JSON data; errors name ``source`` (file and holder) and the key."""
         d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__ if f != "checks"), ("checks",))
-        checks = d.get("checks", [])
-        if not isinstance(checks, list):
-            _fail(source, "checks", f"must be a list, got {_kind(checks)}")
+        checks = _list(d.get("checks", []), source, "checks")
         holder = check_holder_dict(d["holder"], source)
         interface = _text(d["interface"], source, "interface", _MAX_NAME)
         if interface != holder["interface"]:
             _fail(source, "interface", f"{interface!r} differs from holder.interface {holder['interface']!r}")
-        sets = d["param_sets"]
-        if not isinstance(sets, list):
-            _fail(source, "param_sets", f"must be a list of parameter objects, got {_kind(sets)}")
+        sets = _list(d["param_sets"], source, "param_sets", " of parameter objects")
         options = d["model_options"]
         if not isinstance(options, dict):
             _fail(source, "model_options", f"must be a JSON object, got {_kind(options)}")
-        records = d["identifications"]
-        if not isinstance(records, list):
-            _fail(source, "identifications", f"must be a list, got {_kind(records)}")
+        records = _list(d["identifications"], source, "identifications")
         return cls(
             name=_text(d["name"], source, "name", _MAX_NAME),
             holder=holder,

@@ -139,8 +139,12 @@ def _sha256(path: str) -> str:
         return ""
 
 
-def report_pages(result, analyses, recordings, assemblies, model_options=None) -> list[ReportPage]:
-    """One :class:`ReportPage` per recording of an identification (predictions computed here)."""
+def report_pages(result, analyses, recordings, assemblies, model_options=None, sha256s=None) -> list[ReportPage]:
+    """One :class:`ReportPage` per recording of an identification (predictions computed here).
+
+    ``sha256s``: the recordings' hashes where the caller has them already (batch hashes
+    every file while planning); otherwise each file is hashed here.
+    """
     from taptune.library.schema import utc_now
 
     date = utc_now()
@@ -153,7 +157,7 @@ def report_pages(result, analyses, recordings, assemblies, model_options=None) -
             holder=asm.holder.name,
             tool=asm.tool.name,
             stickout_mm=asm.stickout * 1e3,
-            sha256=_sha256(files[k]),
+            sha256=sha256s[k] if sha256s is not None else _sha256(files[k]),
             date=date,
             result=recording_view(result, k),
             analysis=analysis,

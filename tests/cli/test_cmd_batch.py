@@ -123,6 +123,7 @@ def test_batch_report_has_a_summary_and_a_page_per_identified_recording(folder, 
 @pytest.mark.parametrize("args, message", [
     (["--jobs", "0"], "--jobs must be at least 1"),
     (["--population", "0"], "--population must be at least 1"),
+    (["--library", "lib.json", "--report", "lib.json"], "lib.json: is the holder library"),
 ])
 def test_bad_options_exit_2_with_one_line(tmp_path, capsys, args, message):
     code, _, err = run_cli([tmp_path, *args], capsys)

@@ -166,3 +166,15 @@ def test_a_real_double_hit_is_still_found_through_aac(tmp_path, delay_s, strengt
     aac = read_audio(encode(tmp_path / "bounce.m4a", rec.samples[:, 0], "aac", 96_000))
     taps = find_taps(to_mono(aac.samples, FS), FS, raw=aac.samples, subtype=aac.subtype)
     assert len(taps) == 3 and taps[1].double_hit and not taps[1].used
+
+
+def test_an_audio_stream_without_a_known_codec_exits_2_with_one_line(taps, tmp_path, capsys):
+    # A damaged sample-table box name: FFmpeg still lists the audio stream but finds no
+    # codec for it (PyAV gives it no codec context); found by flipping bytes of an M4A.
+    data = taps[0]["aac"].read_bytes()
+    assert data.count(b"stbl") == 1
+    damaged = tmp_path / "damaged.m4a"
+    damaged.write_bytes(data.replace(b"stbl", b"\xf6tbl"))
+    assert main(["spectrum", str(damaged)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "unknown audio codec" in err and "Traceback" not in err, err

@@ -76,6 +76,12 @@ def test_last_identified_is_the_latest_date():
 NAME = "ER32 collet chuck HSK-A63 x 100"
 
 
+# A valid check record (taptune check) to break one key at a time.
+CHECK = {"date": "2026-11-22T12:00:00Z", "recording": "tap.wav", "sha256": "0" * 64, "tool": "end mill",
+         "stickout_mm": 50.0, "verdict": "consistent", "taptune_version": "0.1.0",
+         "modes": [{"mode": 1, "measured_hz": 3000.0, "predicted_hz": 3010.0, "band_hz": 30.0}]}
+
+
 def mutate(path: tuple, value):
     def apply(doc):
         node = doc["holders"][NAME]
@@ -113,6 +119,14 @@ def mutate(path: tuple, value):
         (mutate(("model_options",), [1, 2]), "model_options", "JSON object"),
         (mutate(("__class__",), "os.system"), "__class__", "not a known key"),
         (mutate(("name",), "other"), "name", "differs from its key"),
+        (mutate(("param_sets",), {}), "param_sets", "must be a list of parameter objects"),
+        (mutate(("identifications",), "tap.wav"), "identifications", "must be a list, got a string"),
+        (mutate(("checks",), "oops"), "checks", "must be a list, got a string"),
+        (mutate(("checks",), [CHECK | {"modes": {}}]), "checks[0].modes", "must be a list, got an object"),
+        (mutate(("checks",), [CHECK | {"verdict": "fine"}]), "checks[0].verdict", "must be one of consistent"),
+        (mutate(("checks",), [CHECK | {"sha256": "abc"}]), "checks[0].sha256", "64 lower-case hex"),
+        (mutate(("checks",), [CHECK | {"modes": [{"mode": 1, "measured_hz": None, "predicted_hz": 3000.0,
+                                                  "band_hz": -1.0}]}]), "checks[0].modes[0].band_hz", ">= 0"),
     ],
 )
 def test_validation_names_file_holder_and_key(tmp_path, change, key, problem):
