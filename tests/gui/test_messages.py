@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 
-
-
 def test_save_text_replaces_the_file_whole(qtbot, tmp_path):
     from taptune.gui import messages
 
