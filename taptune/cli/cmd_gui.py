@@ -38,8 +38,10 @@ def add_parser(sub, name: str, help_text: str) -> None:
 
 
 def run(args) -> int:
+    from taptune.cli.common import output_path
     from taptune.errors import InputError
 
+    output_path(args.screenshot, "screenshot")  # a folder or an unwritable place: now, not after the window
     for wav in (args.wav, args.second):
         if wav and not Path(wav).is_file():
             raise InputError(f"{wav}: no such file")

@@ -196,12 +196,26 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, 
     if view:
         window.show_view(view)
     settle(window)
-    pixmap = window.grab()
-    if not pixmap.save(str(screenshot), "PNG"):
+    if not _save_png(window.grab(), screenshot):
         print(f"taptune gui: cannot write {screenshot}", file=sys.stderr)
         status = 1
     window.close()
     return status
+
+
+def _save_png(pixmap, path) -> bool:
+    """Save ``pixmap`` as a PNG through :mod:`taptune.io.atomic` (an old picture stays whole on failure)."""
+    from taptune.io.atomic import atomic_write
+
+    def write(tmp) -> None:
+        if not pixmap.save(str(tmp), "PNG"):
+            raise OSError(f"cannot write {path}")
+
+    try:
+        atomic_write(path, write)
+    except OSError:
+        return False
+    return True
 
 
 def _wait_analysis(window) -> str:

@@ -97,11 +97,6 @@ def tool_teeth(name: str) -> int | None:
     return int(m.group(1) or m.group(2)) if m else None
 
 
-def tool_diameter_mm(tool) -> float:
-    """Cutting diameter of a tool [mm]: the flute diameter, else the last segment's (as ``taptune lobes``)."""
-    return (tool.flute_diameter or tool.segments[-1].od) / MM
-
-
 def _spin(lo, hi, decimals, suffix, value) -> QDoubleSpinBox:
     box = QDoubleSpinBox()
     box.setRange(lo, hi)
@@ -241,7 +236,9 @@ class MachineView(QWidget):
         tool = source.assembly.tool
         if previous is None or previous.assembly.tool != tool:
             # A new tool brings its diameter, teeth (from its name) and a quarter-diameter cut.
-            d = tool_diameter_mm(tool)
+            from taptune.cli.cut import tool_diameter_mm
+
+            d = tool_diameter_mm(source.assembly)  # as ``taptune lobes`` takes it
             for box, value in ((self.diameter, d), (self.ae, round(d / 4, 2)),
                                (self.teeth, tool_teeth(tool.name) or self.teeth.value())):
                 box.blockSignals(True)

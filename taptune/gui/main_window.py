@@ -66,16 +66,18 @@ def sidecar_assembly(path) -> str | None:
     return str(max(candidates, key=lambda p: len(p.stem))) if candidates else None
 
 
-def analyse_file(path: str, assembly):
+def analyse_file(path: str, assembly, recording=None):
     """Read a recording and analyse it, guided by ``assembly`` when there is one (worker thread).
 
-    Returns ``(recording, analysis, expected_hz)``; ``expected_hz`` is the model's guess
+    ``recording``, when given, is the audio of ``path`` already read: an analysis again
+    after an assembly edit does not read and decode the file again. Returns ``(recording, analysis, expected_hz)``; ``expected_hz`` is the model's guess
     of f1–f3 with nominal parameters (None without an assembly).
     """
     from taptune.identify.pipeline import analyse_for_assembly, model_expectation
     from taptune.io.audio import read_audio
 
-    recording = read_audio(path)
+    if recording is None:
+        recording = read_audio(path)
     guidance = model_expectation(assembly) if assembly is not None else None
     analysis = analyse_for_assembly(recording, assembly, guidance=guidance)
     return recording, analysis, None if guidance is None else guidance[0]
@@ -403,12 +405,12 @@ class MainWindow(QMainWindow):
             return
         self._analyse_second(str(path), second)
 
-    def _analyse_second(self, path: str, assembly) -> None:
+    def _analyse_second(self, path: str, assembly, recording=None) -> None:
         self.statusBar().showMessage(f"Analysing the 2nd recording {path}…")
         self._second_seq += 1
         seq = self._second_seq
         self._second_loading = self.runner.start(
-            analyse_file, path, assembly, with_progress=False,
+            analyse_file, path, assembly, recording, with_progress=False,
             on_finished=lambda result: seq == self._second_seq and self._second_analysed(path, assembly, result),
             on_failed=lambda message: seq == self._second_seq and self._analysis_failed(path, message, second=True),
         )
@@ -487,7 +489,7 @@ class MainWindow(QMainWindow):
         self.banner.hide()
         self._analyse(str(path))
 
-    def _analyse(self, path: str) -> None:
+    def _analyse(self, path: str, recording=None) -> None:
         assembly = self.assembly_panel.assembly
         self.statusBar().showMessage(f"Analysing {path}…")
         self._set_progress(None, "analysing the recording")
@@ -495,7 +497,7 @@ class MainWindow(QMainWindow):
         self._analysis_seq += 1
         seq = self._analysis_seq
         task = self.runner.start(
-            analyse_file, path, assembly, with_progress=False,
+            analyse_file, path, assembly, recording, with_progress=False,
             on_finished=lambda result: seq == self._analysis_seq and self._analysed(path, assembly, result),
             on_failed=lambda message: seq == self._analysis_seq and self._analysis_failed(path, message),
         )
@@ -551,10 +553,10 @@ class MainWindow(QMainWindow):
             self._reanalyse.start()  # try again when the running job has ended
             return
         if self.assembly_panel.assembly != self.analysed_assembly:
-            self._analyse(self.recording_path)
+            self._analyse(self.recording_path, self.recording)
         second, _problem = self.assembly_panel.second_assembly()
         if self.second is not None and second is not None and second != self.second.assembly:
-            self._analyse_second(self.second.path, second)
+            self._analyse_second(self.second.path, second, self.second.recording)
 
     # ------------------------------------------------------------------ identification
 

@@ -35,12 +35,12 @@ def _show(parent, icon, title: str, text: str) -> QMessageBox:
 
 
 def save_text(parent: QWidget | None, path, text: str) -> bool:
-    """Write ``text`` to ``path`` through a temporary file; a dialog says why if it fails."""
+    """Write ``text`` to ``path`` atomically (:mod:`taptune.io.atomic`); a dialog says why if it fails."""
+    from taptune.io.atomic import atomic_write_bytes
+
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.part")
     try:
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(path)
+        atomic_write_bytes(path, text.encode("utf-8"))
     except OSError as err:
         show_error(parent, "Cannot save", f"{path}: {err.strerror or err}")
         return False

@@ -175,3 +175,22 @@ def test_library_holder_predicts_with_the_panel_tool(qtbot, window, library_path
                                                           + band.model_form_hz[0] ** 2), rel=1e-9)
     assert view.band_table.item(0, 3).text() == f"{band.geometry_hz[0]:,.0f}"
     assert f"Calibration: {band.calibration}" in view.band_note.text()
+
+
+def test_an_assembly_edit_analyses_again_without_reading_the_file_again(qtbot, window, generated_recording,
+                                                                        monkeypatch):
+    import taptune.io.audio
+
+    _load(qtbot, window, generated_recording[0])
+    recording = window.recording
+    stickout = window.assembly_panel.assembly.stickout
+
+    def unread(path):
+        raise AssertionError(f"{path} read again")
+
+    monkeypatch.setattr(taptune.io.audio, "read_audio", unread)
+    with qtbot.waitSignal(window.analysis_ready, timeout=30000):
+        window.assembly_panel.set_stickout_mm(stickout * 1e3 + 2.0)
+    assert window.analysed_assembly.stickout == pytest.approx(stickout + 2e-3)
+    assert window.recording is recording
+    assert not messages.history or messages.history[-1][0] != "Cannot analyse the recording"

@@ -122,6 +122,8 @@ def test_gui_bad_input_is_one_line_exit_2(tmp_path, capsys):
     assert "missing2.wav: no such file" in capsys.readouterr().err
     assert main(["gui", "--check", "--screenshot", str(tmp_path / "x.png")]) == 2
     assert "--check needs a recording (WAV) and --holder NAME" in capsys.readouterr().err
+    assert main(["gui", "--screenshot", str(tmp_path)]) == 2
+    assert "is a folder; give a file name for the screenshot" in capsys.readouterr().err
 
 
 def test_screenshot_of_the_predictor_for_a_library_holder(tmp_path, reference_toml, reference_assembly):

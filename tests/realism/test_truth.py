@@ -123,3 +123,23 @@ def test_worn_holder_has_softer_contact_and_lower_f1(er32):
 def test_truth_model_refuses_an_asymmetric_holder(er32):
     with pytest.raises(ValueError):
         truth_model(er32, TruthHolder(HOLDER_A, asymmetry=0.01))
+
+
+def test_extra_mass_adds_its_mass_and_rotary_inertia_to_the_rigid_body(er32):
+    # Rigid-body checks by hand: a unit translation w = 1 (θ = 0) of the whole assembly
+    # gains exactly the ring's mass m; a unit rotation about the ring's centre
+    # (w = z - zc, θ = 1) gains m·radius2/4 plus m·L²/12 for the spread over L
+    # (to the lumping on the mesh's nodes).
+    nut = ExtraMass(mass=0.08, z_from_front=0.011, length=0.022, radius2=(0.025**2 + 0.018**2))
+    plain, _ = truth_model(er32, TruthHolder(HOLDER_A))
+    heavy, _ = truth_model(er32, TruthHolder(HOLDER_A, extra_mass=nut))
+    added = (heavy.M_tool - plain.M_tool).toarray()
+    z = plain.z_nodes
+    translation = np.zeros(plain.n_dofs)
+    translation[0::2] = 1.0
+    assert translation @ added @ translation == pytest.approx(nut.mass, rel=1e-12)
+    zc = er32.holder.length - nut.z_from_front
+    rotation = np.zeros(plain.n_dofs)
+    rotation[0::2], rotation[1::2] = z - zc, 1.0
+    expected = nut.mass * (nut.radius2 / 4 + nut.length**2 / 12)
+    assert rotation @ added @ rotation == pytest.approx(expected, rel=0.01)  # 0.013 % on this mesh
