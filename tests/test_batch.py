@@ -97,6 +97,19 @@ def test_discover_is_recursive_sorted_case_insensitive_and_reports_missing_paths
     assert "no such file or folder" in missing[0].message
 
 
+def test_discover_takes_every_suffix_read_audio_reads(tmp_path):
+    # A folder of phone memos (M4A), MP3, Ogg and FLAC is batched like a folder of WAVs;
+    # before, only .wav/.flac were found and the rest was silently left out.
+    from taptune.io.audio import AUDIO_SUFFIXES
+
+    names = ["a.m4a", "b.MP3", "c.ogg", "d.flac", "e.opus", "f.wav", "g.txt", "h.toml"]
+    for name in names:
+        (tmp_path / name).write_bytes(b"x")
+    files, _ = discover([tmp_path])
+    assert [f.name for f in files] == names[:6]
+    assert {".m4a", ".mp3", ".ogg", ".flac", ".opus", ".wav"} <= set(AUDIO_SUFFIXES)
+
+
 def test_an_explicitly_named_file_is_taken_whatever_its_extension(tmp_path):
     f = tmp_path / "recording.aiff"
     f.write_bytes(b"x")
@@ -154,7 +167,7 @@ def test_plan_fails_each_unusable_file_and_keeps_the_rest(tmp_path):
 
 
 def test_plan_with_nothing_to_do_is_bad_input(tmp_path):
-    with pytest.raises(InputError, match="no .wav or .flac"):
+    with pytest.raises(InputError, match="no recording"):
         plan([tmp_path], BatchOptions(out_dir=tmp_path / "out"))
 
 

@@ -3,7 +3,7 @@
 No argument parsing here (that is :mod:`taptune.cli.cmd_batch`). The parts, in the order
 a batch runs them:
 
-1. :mod:`~taptune.batch.planning` — :func:`discover` the WAV/FLAC files, :func:`find_assembly`
+1. :mod:`~taptune.batch.planning` — :func:`discover` the audio (WAV, FLAC, MP3, Ogg, M4A …) files, :func:`find_assembly`
    for each, and :func:`plan` the work (hash, skip what was identified before with the
    same content, group into jobs);
 2. :mod:`~taptune.batch.pool` — :func:`run_jobs` runs every job in its own worker process;

@@ -1,6 +1,6 @@
 """Discovery and planning: which recordings, with which assembly, and what is left to do.
 
-:func:`discover` the WAV/FLAC files (recursively, sorted, so every run sees the same
+:func:`discover` the recordings (every suffix :mod:`taptune.io.audio` reads, recursively, sorted, so every run sees the same
 order), :func:`find_assembly` for each, then :func:`plan`: load each assembly, hash each
 recording, skip what was already identified with the same content (result JSON or
 library provenance, unless ``force``), and group the rest into jobs (one recording each,
@@ -34,7 +34,8 @@ def _is_audio(path: Path) -> bool:
 def discover(paths: Sequence[str | os.PathLike]) -> tuple[list[Path], list[Row]]:
     """The recordings under ``paths``, and a failed row for each path that does not exist.
 
-    Folders are searched recursively for ``.wav``/``.flac`` (any case); a file named
+    Folders are searched recursively for every suffix :func:`~taptune.io.audio.read_audio`
+    reads (:data:`~taptune.io.audio.AUDIO_SUFFIXES`: WAV, FLAC, MP3, Ogg, M4A …, any case); a file named
     explicitly is taken whatever its extension (the reader will say if it is not
     audio). The list is sorted and without duplicates, so runs are reproducible.
     """
@@ -232,7 +233,7 @@ def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: st
         load_assembly(assembly)  # a bad --assembly concerns every file: bad input up front, exit 2
     files, rows = discover(paths)
     if not files and not rows:
-        raise InputError(f"no .wav or .flac recording under {', '.join(map(str, paths))}")
+        raise InputError(f"no recording (WAV, FLAC, MP3, Ogg, M4A …) under {', '.join(map(str, paths))}")
     items, bad = _prepare(files, assembly, Path(options.out_dir))
     _protect_library(items, options)
     rows += bad

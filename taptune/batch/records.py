@@ -13,8 +13,10 @@ from typing import Callable
 
 from taptune.errors import TaptuneError
 from taptune.identify import GAOptions, IdentifyOptions
+# The one list of what read_audio reads (WAV, FLAC, MP3, Ogg, Opus, M4A/AAC …), so a
+# folder of phone memos is batched like a folder of WAVs.
+from taptune.io.audio import AUDIO_SUFFIXES
 
-AUDIO_SUFFIXES = (".wav", ".flac")
 SUMMARY_NAME = "summary.csv"
 ERROR_LOG_NAME = "errors.log"
 SUMMARY_HEADER = (

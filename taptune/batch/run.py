@@ -25,7 +25,7 @@ def run_batch(
     Parameters
     ----------
     paths : sequence of path-like
-        Files and folders (searched recursively for WAV/FLAC).
+        Files and folders (searched recursively for audio (WAV, FLAC, MP3, Ogg, M4A …)).
     options : BatchOptions
     assembly : path-like, optional
         One assembly file for every recording (else each finds its own, see :func:`find_assembly`).

@@ -11,7 +11,7 @@ from taptune.cli.cut import add_cut_args
 
 def add_parser(sub, name, help_text):
     p = sub.add_parser(name, help=help_text, description=(
-        "Identify every WAV/FLAC recording under the given files and folders (recursively), in "
+        "Identify every recording (WAV, FLAC, MP3, Ogg, M4A …) under the given files and folders (recursively), in "
         "parallel worker processes. Each recording uses --assembly, else the .toml with the same "
         "stem beside it (name_tap.wav may use name.toml), else an assembly.toml in its folder. Writes one result JSON per recording "
         "(as 'taptune identify --json') and summary.csv into --out, and stores the holders in the "

@@ -142,7 +142,7 @@ def test_a_bad_assembly_option_is_bad_input_before_any_work(tmp_path, capsys):
 def test_nothing_to_do_is_bad_input(tmp_path, capsys):
     code, _, err = run_cli([tmp_path, "--out", tmp_path / "out"], capsys)
     assert (code, err.count("\n")) == (2, 1)
-    assert "no .wav or .flac recording" in err
+    assert "no recording (WAV, FLAC" in err
 
 
 def test_two_batches_at_once_on_one_library_lose_nothing(tmp_path):
