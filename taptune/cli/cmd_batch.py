@@ -57,10 +57,9 @@ def _check(args) -> None:
         if value is not None and value < 1:
             raise InputError(f"--{flag.replace('_', '-')} must be at least 1, got {value}")
     setup = machine_setup(args)  # before anything is written
-    from taptune.library.store import default_library_path
 
     # Even with --no-save: a report written over the library file would destroy it.
-    output_path(args.report, "report", protect=(default_library_path(args.library),))
+    output_path(args.report, "report", library=args.library)
     return setup
 
 

@@ -58,7 +58,7 @@ def run(args) -> int:
     from taptune.library.store import HolderLibrary, default_library_path
 
     library = HolderLibrary(default_library_path(args.library))
-    output_path(args.json, "JSON", protect=(library.path,))
+    output_path(args.json, "JSON", protect=(library.path,), library=args.library)
     assembly = load_assembly(args.assembly)
     entry = library.get(args.holder)  # an unknown holder or a broken library: before the analysis
     recording = read_audio(args.wav)

@@ -41,7 +41,7 @@ def run(args) -> int:
     from taptune.cli.common import output_path
     from taptune.errors import InputError
 
-    output_path(args.screenshot, "screenshot")  # a folder or an unwritable place: now, not after the window
+    output_path(args.screenshot, "screenshot", library=args.library)  # a folder or an unwritable place: now, not after the window
     for wav in (args.wav, args.second):
         if wav and not Path(wav).is_file():
             raise InputError(f"{wav}: no such file")

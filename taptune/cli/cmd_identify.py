@@ -86,7 +86,7 @@ def run(args) -> int:
 
     library = None if args.no_save else default_library_path(args.library)
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
-        output_path(path, what, protect=(library,))
+        output_path(path, what, library=args.library)
     recordings, assemblies = load_inputs(args.wav, args.assembly)
     if library is not None:
         # A broken library is reported before the fit, not after it.

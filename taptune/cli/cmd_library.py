@@ -200,7 +200,10 @@ def _show(lib, args) -> int:
 def _export(lib, args) -> int:
     from taptune.library.exchange import export_library
 
+    from taptune.cli.common import refuse_library_output
+
     fmt = args.format or ("csv" if args.out.lower().endswith(".csv") else "json")
+    refuse_library_output(args.out, "export", args.library, protect=(lib.path,))
     count = export_library(lib, args.out, fmt)
     print(f"exported {count} holder{'s' if count != 1 else ''} from {lib.path} to {args.out} ({fmt})")
     return 0
@@ -224,7 +227,10 @@ def _receptance(lib, args) -> int:
     from taptune.io.assembly import load_assembly
     from taptune.library.exchange import frequency_grid, holder_receptance, receptance_format, write_receptance
 
+    from taptune.cli.common import refuse_library_output
+
     receptance_format(args.out)  # a wrong extension fails before the model runs
+    refuse_library_output(args.out, "receptance", args.library, protect=(lib.path,))
     entry = lib.get(args.name)
     freq = frequency_grid(args.fmin, args.fmax, args.df)
     assembly = load_assembly(args.assembly)

@@ -69,7 +69,7 @@ def run(args) -> int:
     from taptune.machine import stability_lobes
 
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.plot, "plot")):
-        output_path(path, what)
+        output_path(path, what, library=args.library)
     cut = cut_options(args)  # the whole cut checked before the tool-point FRF is computed
     if args.frf and args.diameter is None:
         raise InputError("--frf needs --diameter MM (the tool diameter)")

@@ -98,7 +98,7 @@ def run(args) -> int:
     from taptune.model.fe import build_model
     from taptune.model.modes import analyse
 
-    output_path(args.json, "JSON")
+    output_path(args.json, "JSON", library=args.library)
     assembly = load_assembly(args.assembly)
     params, options, source = holder_params(args)
     fe = build_model(assembly, options)

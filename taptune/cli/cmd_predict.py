@@ -31,8 +31,8 @@ def run(args) -> int:
     from taptune.io.assembly import load_assembly
     from taptune.library.store import HolderLibrary, default_library_path
 
-    output_path(args.json, "JSON")
-    output_path(args.plot, "plot")
+    output_path(args.json, "JSON", library=args.library)
+    output_path(args.plot, "plot", library=args.library)
     assembly = load_assembly(args.assembly)
     entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
     warnings = list(assembly.warnings)

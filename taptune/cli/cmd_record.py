@@ -41,7 +41,7 @@ def run(args) -> int:
             raise InputError("--out WAV is required (where to save the taps)")
         from taptune.cli.common import output_path
 
-        output_path(args.out, "recording")
+        output_path(args.out, "recording", create=False)
         if args.taps <= 0 or args.seconds <= 0 or args.sample_rate <= 0:
             raise InputError("--taps, --seconds and --sample-rate must be > 0")
         assembly_text = None

@@ -176,7 +176,7 @@ def run(args) -> int:
     from taptune.io.machine import write_toolpoint_csv
 
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.uff, "universal file"), (args.plot, "plot")):
-        output_path(path, what)
+        output_path(path, what, library=args.library)
     assembly, machine, holder, warnings = machine_inputs(args, "toolpoint")
     freq = frequency_grid(args, machine)
     frfs, assemblies = toolpoint_frfs(assembly, machine, holder, freq, args.stickout, args.contact)

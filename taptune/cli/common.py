@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
 from taptune.errors import InputError
-from taptune.io.atomic import atomic_write_bytes
+from taptune.io.atomic import atomic_write_bytes, check_writable
 
 
 def write_json(data: dict, out: str | None) -> None:
@@ -59,16 +60,67 @@ class ProgressBar:
             self.stream.flush()
 
 
-def output_path(path: str | None, what: str, protect=()) -> str | None:
-    """Make sure an output file can be written before any long work: not a folder, not one of
-    the ``protect`` files (e.g. the holder library), and its folder exists (created here)."""
+def _same_file(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` name one file (after links; also two hard links of one file)."""
+    if a.expanduser().resolve() == b.expanduser().resolve():
+        return True
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def refuse_library_output(path: str | os.PathLike | None, what: str, library=None, protect=()) -> None:
+    """Refuse an output file that is a holder library file (or its lock): one place for every command.
+
+    Parameters
+    ----------
+    path : path or None
+        The output file (None or ``-`` = stdout: nothing to check).
+    what : str
+        What would be written there ("JSON", "plot" …), for the message.
+    library : path or None
+        The command's ``--library`` value; None means ``$TAPTUNE_LIBRARY``, else the
+        user data folder (:func:`~taptune.library.store.default_library_path`). The
+        default library is protected even when another ``--library`` is given.
+    protect : sequence of paths
+        Further library files to protect (an open library's ``path``).
+
+    Raises
+    ------
+    InputError
+        ``path`` is one of those libraries or its ``.lock`` file.
+    """
+    if path is None or str(path) == "-":
+        return
+    from taptune.library.store import default_library_path
+
+    libraries = [default_library_path(library), default_library_path(None)] + [Path(p) for p in protect if p]
+    target = Path(path)
+    for lib in libraries:
+        if _same_file(target, lib):
+            raise InputError(f"{path}: is the holder library; writing the {what} there would destroy it")
+        if _same_file(target, lib.with_name(lib.name + ".lock")):
+            raise InputError(f"{path}: is the holder library's lock file; choose another name for the {what}")
+
+
+def output_path(path: str | None, what: str, protect=(), library=None, create: bool = True) -> str | None:
+    """Make sure an output file can be written before any long work.
+
+    Not a folder, not the holder library (:func:`refuse_library_output`, with ``library``
+    the command's ``--library`` value and ``protect`` further library files), and its
+    folder exists (created here) or, with ``create=False``, could be created (nothing
+    is written: ``taptune record`` writes nothing before the first tap).
+    """
     if path is None or path == "-":
         return path
     target = Path(path).expanduser().resolve()
     if target.is_dir():
         raise InputError(f"{path}: is a folder; give a file name for the {what}")
-    if any(target == Path(p).expanduser().resolve() for p in protect if p):
-        raise InputError(f"{path}: is the holder library; writing the {what} there would destroy it")
+    refuse_library_output(path, what, library, protect)
+    if not create:
+        check_writable(path)
+        return path
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:

@@ -15,6 +15,8 @@ import sys
 from pathlib import Path
 from typing import Callable
 
+from taptune.errors import InputError
+
 
 def _fsync_dir(folder: Path) -> None:
     """Make a rename in ``folder`` durable (POSIX); Windows has no directory handles to sync."""
@@ -54,6 +56,29 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None
         tmp.unlink(missing_ok=True)
         raise
     _fsync_dir(path.parent)
+
+
+def check_writable(path: str | Path) -> None:
+    """Refuse, without creating anything, a file that could not be written later.
+
+    The nearest existing folder on the way to ``path`` must be a folder this user may
+    write into (the missing ones below it are created with the first write).
+
+    Raises
+    ------
+    InputError
+        ``path`` is a folder, or sits under a file or a folder that cannot be written.
+    """
+    path = Path(path).expanduser()
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give a file name")
+    folder = path.absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise InputError(f"{path}: cannot be written ({folder} is a file, not a folder)")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot be written (no permission to write into {folder})")
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:

@@ -30,7 +30,7 @@ from typing import Callable
 import numpy as np
 
 from taptune.errors import DeviceError, InputError
-from taptune.io.atomic import atomic_write
+from taptune.io.atomic import atomic_write, check_writable
 
 # Levels are reported in dB relative to full scale; silence is shown as this floor.
 FLOOR_DBFS = -120.0
@@ -532,10 +532,14 @@ class Recorder:
         self._queue.put((np.array(indata, dtype=np.float64, copy=True), bool(status)))
 
     def start(self) -> None:
-        """Open and start the input stream; write the sidecar assembly file first."""
-        self.out_path.parent.mkdir(parents=True, exist_ok=True)
-        if self.assembly_toml is not None:
-            _atomic_write_text(self.sidecar_path, self.assembly_toml)
+        """Open and start the input stream.
+
+        Nothing is written here, not even the WAV's folder: the WAV and its sidecar
+        assembly file appear with the first tap, so a missing microphone (or a session
+        with no tap) leaves no files behind. A folder that could never be written is
+        refused now, before the user taps.
+        """
+        check_writable(self.out_path)
         factory = self._factory or sounddevice_stream
         if self._factory is None:
             resolved = find_input_device(self.device)
@@ -601,6 +605,9 @@ class Recorder:
         return "no tap was recorded"
 
     def _save(self) -> None:
+        if self.saved_taps == 0 and self.assembly_toml is not None:
+            # With the first tap: the sidecar goes beside the WAV only once there is a WAV.
+            _atomic_write_text(self.sidecar_path, self.assembly_toml)
         _atomic_write_wav(self.out_path, self.trigger.samples(), self.settings.sample_rate)
         self.saved_taps = len(self.trigger.taps)
 

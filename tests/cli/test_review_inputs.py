@@ -44,7 +44,7 @@ def one_line_exit_2(capsys, code, *needles):
 def test_exporting_onto_the_library_itself_is_refused_and_keeps_it(library, capsys):
     before = library.path.read_bytes()
     code = main(["library", "export", str(library.path), "--format", "csv", "--library", str(library.path)])
-    one_line_exit_2(capsys, code, "is the library being exported")
+    one_line_exit_2(capsys, code, "is the holder library")
     assert library.path.read_bytes() == before
 
 

@@ -1,0 +1,134 @@
+"""Outputs that must not destroy anything: no command writes onto the holder library, and
+``taptune record`` writes nothing before the first tap."""
+
+import os
+
+import pytest
+
+from taptune.cli import main
+from taptune.io import recording
+from taptune.io.assembly import load_assembly
+from taptune.io.recording import FakeInputStream, InputDevice, Recorder, TriggerSettings
+from taptune.library.schema import HolderEntry
+from taptune.library.store import HolderLibrary
+from taptune.model.params import NOMINAL
+from tests.io.test_recording import FS, synthetic_taps
+
+
+@pytest.fixture
+def library(tmp_path, reference_toml):
+    lib = HolderLibrary(tmp_path / "lib" / "holders.json")
+    lib.put(HolderEntry.create(load_assembly(reference_toml).holder, NOMINAL, (NOMINAL,)))
+    return lib
+
+
+def one_line_exit_2(capsys, code, *needles):
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    for needle in needles:
+        assert needle in err
+
+
+# --------------------------------------------------------------------------- the library is never an output
+
+
+@pytest.mark.parametrize("argv", [
+    ["model", "{toml}", "--json", "{lib}", "--library", "{lib}"],
+    ["predict", "{toml}", "--holder", "x", "--json", "{lib}", "--library", "{lib}"],
+    ["predict", "{toml}", "--holder", "x", "--plot", "{lib}", "--library", "{lib}"],
+    ["toolpoint", "{toml}", "--machine", "{toml}", "--csv", "{lib}", "--library", "{lib}"],
+    ["spectrum", "{toml}", "--json", "{lib}"],            # no --library: $TAPTUNE_LIBRARY
+    ["model", "{toml}", "--json", "{lib}"],
+    ["lobes", "{toml}", "--machine", "{toml}", "--teeth", "4", "--ae", "2", "--milling", "down", "--json", "{lib}"],
+    ["spindle", "--dummy", "{toml}", "--aa", "{toml}", "--ab", "{toml}", "--bb", "{toml}", "--points", "10", "20",
+     "--out", "{lib}.csv"],
+    ["library", "export", "{lib}", "--library", "{other}"],  # the default library while exporting another
+    ["library", "receptance", "x", "--assembly", "{toml}", "--out", "{lib}.csv", "--library", "{other}"],
+    ["model", "{toml}", "--json", "{lib}.lock", "--library", "{lib}"],
+    ["demo", "--json", "{lib}"],
+])
+def test_no_command_writes_its_output_onto_the_holder_library(argv, library, reference_toml, tmp_path,
+                                                              monkeypatch, capsys):
+    # Before, model/predict/spectrum/lobes/toolpoint/demo --json and a library export
+    # onto the default library replaced the library with their output.
+    monkeypatch.setenv("TAPTUNE_LIBRARY", str(library.path))
+    lib = str(library.path)
+    if argv[0] == "spindle" or argv[:2] == ["library", "receptance"]:
+        os.link(library.path, tmp_path / "hardlink.csv")  # another name of the same file
+        lib = str(tmp_path / "hardlink")
+    argv = [a.format(toml=reference_toml, lib=lib, other=tmp_path / "other.json") for a in argv]
+    before = library.path.read_bytes()
+    one_line_exit_2(capsys, main(argv), "holder library")
+    assert library.path.read_bytes() == before
+    assert sorted(p.name for p in library.path.parent.iterdir()) == ["holders.json", "holders.json.lock"]
+
+
+def test_refuse_library_output_is_silent_for_other_files_and_stdout(library, tmp_path):
+    from taptune.cli.common import refuse_library_output
+
+    refuse_library_output(None, "JSON", library.path)
+    refuse_library_output("-", "JSON", library.path)
+    refuse_library_output(tmp_path / "result.json", "JSON", library.path)
+
+
+# --------------------------------------------------------------------------- record writes nothing before a tap
+
+
+def test_a_missing_microphone_leaves_no_file_and_no_folder(monkeypatch, tmp_path, reference_toml, capsys):
+    monkeypatch.setattr(recording, "input_devices", lambda: [])
+    out = tmp_path / "new" / "deeper" / "tap.wav"
+    code = main(["record", "--out", str(out), "--assembly", str(reference_toml)])
+    one_line_exit_2(capsys, code, "no audio input device")
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_device_that_fails_to_start_leaves_no_sidecar(tmp_path):
+    class Broken(FakeInputStream):
+        def start(self):
+            raise OSError("device busy")
+
+    out = tmp_path / "rec" / "tap.wav"
+    recorder = Recorder(out, TriggerSettings(sample_rate=FS), assembly_toml="[holder]\n",
+                        stream_factory=Broken([0.0]).factory)
+    with pytest.raises(recording.DeviceError, match="device busy"):
+        recorder.start()
+    assert not (tmp_path / "rec").exists()  # before: rec/tap.toml was written first
+
+
+def test_no_tap_heard_leaves_no_files(monkeypatch, tmp_path, reference_toml, capsys):
+    stream = FakeInputStream(synthetic_taps([0.1], amplitude=0.0, seconds=0.5))  # a quiet room, no tap
+    monkeypatch.setattr(recording, "input_devices", lambda: [InputDevice(4, "Fake USB mic", 1, 48000.0)])
+    monkeypatch.setattr(recording, "default_input_index", lambda: 4)
+    monkeypatch.setattr(recording, "sounddevice_stream", stream.factory)
+    out = tmp_path / "quiet" / "tap.wav"
+    assert main(["record", "--out", str(out), "--seconds", "0.3", "--assembly", str(reference_toml)]) == 1
+    assert "no tap heard" in capsys.readouterr().err
+    assert not (tmp_path / "quiet").exists()
+
+
+def test_the_sidecar_appears_with_the_first_tap(tmp_path):
+    out = tmp_path / "rec" / "tap.wav"
+    fake = FakeInputStream(synthetic_taps([0.3, 1.1]))
+    with Recorder(out, TriggerSettings(sample_rate=FS, n_taps=2), assembly_toml="[holder]\n",
+                  stream_factory=fake.factory) as recorder:
+        first = []
+        while not recorder.done:
+            for event in recorder.poll(timeout=1.0):
+                if event.kind == "saved" and event.index == 1:
+                    first = sorted(p.name for p in out.parent.iterdir())
+    assert first == ["tap.toml", "tap.wav"]
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs POSIX permissions, not root")
+def test_record_into_a_read_only_folder_is_refused_before_listening(monkeypatch, tmp_path, capsys):
+    monkeypatch.setattr(recording, "input_devices", lambda: [InputDevice(4, "Fake USB mic", 1, 48000.0)])
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    try:
+        code = main(["record", "--out", str(locked / "sub" / "tap.wav")])
+        one_line_exit_2(capsys, code, "cannot be written", str(locked))
+        assert list(locked.iterdir()) == []
+    finally:
+        locked.chmod(0o755)
