@@ -101,6 +101,8 @@ def run(args) -> int:
     finally:
         bar.close()
     out = identification_record(recordings, assemblies, analyses, result)
+    # The assembly files' own warnings (a misspelt key, an implied collet) first.
+    out["warnings"] = list(dict.fromkeys([w for a in assemblies for w in a.warnings] + list(out["warnings"])))
     if not args.no_save:
         from taptune.library.record import save_identification
 

@@ -51,7 +51,8 @@ def run(args) -> int:
 
             # Read once, validate before waiting for taps, save the same text beside the WAV.
             assembly_text = read_text(args.assembly, "an assembly file", "TOML")
-            assembly_from_toml(assembly_text, args.assembly)
+            for warning in assembly_from_toml(assembly_text, args.assembly).warnings:
+                print(f"taptune record: warning: {warning}", file=sys.stderr)
         settings = recording.TriggerSettings(sample_rate=args.sample_rate, n_taps=args.taps)
         device = recording.find_input_device(args.device)
     except DeviceError as err:

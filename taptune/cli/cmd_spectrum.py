@@ -75,6 +75,9 @@ def run(args) -> int:
     analysis = analyse_recording(recording, interface=interface, expected_hz=expected,
                                  bounds_hz=bounds, options=options, interface_tap=interface_tap,
                                  spread_hz=spread)
+    if args.assembly and assembly.warnings:
+        # The assembly file's own warnings (a misspelt key, an implied collet) first.
+        analysis = replace(analysis, warnings=list(dict.fromkeys([*assembly.warnings, *analysis.warnings])))
     data = analysis.to_dict()
     if expected is not None:
         data["model_bending_hz"] = [round(float(f), 2) for f in expected]

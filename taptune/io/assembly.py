@@ -11,6 +11,7 @@ at ``holder.length``, the tool tip at ``holder.length + stickout``.
 
 from __future__ import annotations
 
+import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
@@ -128,6 +129,9 @@ class Assembly:
     source: str = "<assembly>"
     warnings: tuple[str, ...] = field(default=(), compare=False)
     tolerances: Tolerances = field(default=Tolerances(), compare=False)
+    #: Warnings about the file itself (unknown, probably misspelt keys), kept in
+    #: ``warnings`` whatever stick-out or holder the assembly is later given.
+    file_warnings: tuple[str, ...] = field(default=(), compare=False)
 
     @property
     def inserted_length(self) -> float:
@@ -262,7 +266,7 @@ def validate(asm: Assembly) -> Assembly:
     if asm.inserted_length > h.length + TOL_M:
         fail("[setup] stickout", f"leaves {asm.inserted_length / MM:g} mm of tool inside a holder only {h.length / MM:g} mm long")
 
-    warnings: list[str] = []
+    warnings: list[str] = list(asm.file_warnings)
     # The tool must fit the bore along the whole inserted length.
     z_back, L_h = asm.z_tool_start, h.length
     zb = 0.0
@@ -306,9 +310,24 @@ class _Reader:
     def fail(self, key: str, problem: str):
         raise InputError(f"{self.src}: {key} {problem}")
 
+    def missing(self, data: dict, key: str, where: str):
+        """Fail on a missing required key, naming a present key that looks like its misspelling."""
+        close = difflib.get_close_matches(key, [k for k in data if isinstance(k, str)], n=1, cutoff=0.75)
+        hint = f" (is {close[0]!r} a misspelling of {key!r}?)" if close else ""
+        self.fail(f"{where} {key}".strip() if where else f"[{key}]", f"is missing{hint}")
+
+    def unknown(self, data: dict, known, where: str, warnings: list[str]) -> None:
+        """Add a warning for each key of ``data`` this format does not know (it is ignored)."""
+        for key in data:
+            if key in known:
+                continue
+            close = difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            warnings.append(f"{self.src}: {where} unknown key {key!r} is ignored{hint}")
+
     def table(self, data: dict, key: str, where: str = "") -> dict:
         if key not in data:
-            self.fail(f"[{key}]" if not where else f"{where} {key}", "is missing")
+            self.missing(data, key, where)
         value = data[key]
         if not isinstance(value, dict):
             self.fail(f"[{key}]" if not where else f"{where} {key}", "must be a table")
@@ -318,7 +337,7 @@ class _Reader:
         if key not in data:
             if default is not None:
                 return float(default)
-            self.fail(f"{where} {key}", "is missing")
+            self.missing(data, key, where)
         value = data[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(f"{where} {key}", f"must be a number, got {value!r}")
@@ -330,7 +349,7 @@ class _Reader:
         if key not in data:
             if default is not None:
                 return default
-            self.fail(f"{where} {key}", "is missing")
+            self.missing(data, key, where)
         value = data[key]
         if not isinstance(value, str) or not value.strip():
             self.fail(f"{where} {key}", f"must be a non-empty string, got {value!r}")
@@ -422,7 +441,42 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
         )
     stickout = r.number(s, "stickout", "[setup]") * MM
     return validate(Assembly(holder=holder, tool=tool, stickout=stickout, source=source,
-                             tolerances=_tolerances(r, h, t, s)))
+                             tolerances=_tolerances(r, h, t, s), file_warnings=_unknown_keys(r, data)))
+
+
+# The keys of ASSEMBLY-FORMAT.md (and the optional tolerances); anything else is ignored
+# with a warning, so a misspelt optional key (``gauge_lenght``) is not silently lost.
+_MATERIAL_KEYS = ("density", "youngs_modulus", "poisson", "loss_factor")
+_SEGMENT_KEYS = ("length", "od", "id")
+_KNOWN_KEYS = {
+    "holder": ("name", "interface", "clamp_length", "gauge_length", "material", "segments", "diameter_tolerance"),
+    "tool": ("name", "material", "total_length", "shank_diameter", "flute_length", "flute_diameter",
+             "flute_ratio", "segments", "flute_ratio_tolerance"),
+    "setup": ("stickout", "stickout_tolerance"),
+}
+
+
+def _unknown_keys(r: "_Reader", data: dict) -> tuple[str, ...]:
+    """One warning per key the format does not know, with the known key it resembles.
+
+    Extra top-level sections are welcome (ASSEMBLY-FORMAT.md) unless they look like a
+    misspelt ``[holder]``, ``[tool]`` or ``[setup]``.
+    """
+    out: list[str] = []
+    for key in data:
+        if key not in _KNOWN_KEYS and difflib.get_close_matches(str(key), list(_KNOWN_KEYS), n=1, cutoff=0.75):
+            r.unknown({key: None}, _KNOWN_KEYS, "top level:", out)
+    for table, known in _KNOWN_KEYS.items():
+        where = f"[{table}]"
+        section = data[table]
+        r.unknown(section, known, where, out)
+        if isinstance(section.get("material"), dict):
+            r.unknown(section["material"], _MATERIAL_KEYS, f"{where} material:", out)
+        if table != "setup" and isinstance(section.get("segments"), list):
+            for i, seg in enumerate(section["segments"], 1):
+                if isinstance(seg, dict):
+                    r.unknown(seg, _SEGMENT_KEYS, f"{where} segments[{i}]:", out)
+    return tuple(out)
 
 
 def _tolerances(r: "_Reader", h: dict, t: dict, s: dict) -> Tolerances:
