@@ -2,7 +2,7 @@
 
 A library file is one JSON document::
 
-    {"schema": "taptune-holder-library", "version": 1,
+    {"schema": "taptune-holder-library", "version": 1 (2 when any holder has "checks"),
      "holders": {NAME: ENTRY, ...}}
 
 with ``ENTRY`` as written by :meth:`HolderEntry.to_dict` (lengths in mm, moduli in GPa,
@@ -31,7 +31,8 @@ Every read is
 validated here by hand-written checks on plain JSON data: nothing is ever executed,
 imported or unpickled, and every message names the file, the holder and the key.
 Unknown keys are rejected rather than ignored, so a typo or a foreign document cannot
-pass as a library; a newer format gets a new ``version``.
+pass as a library; a newer format gets a new ``version``: 1 without ``checks``, 2 with
+them (:data:`VERSION`), so a taptune from before checks refuses such a file clearly.
 """
 
 from __future__ import annotations
@@ -61,7 +62,13 @@ from taptune.io.assembly import (
 from taptune.model.params import NAMES, HolderParams
 
 SCHEMA = "taptune-holder-library"
-VERSION = 1
+#: The newest format this build reads and writes. Version 2 added the ``checks`` history;
+#: a library without checks is still written as version 1, so older taptunes keep reading
+#: it, while one with checks is version 2, which they refuse with "written by a newer
+#: taptune" instead of tripping over an unknown key.
+VERSION = 2
+#: The format of a library without ``checks`` (what every taptune before checks reads).
+VERSION_WITHOUT_CHECKS = 1
 
 # Units of the holder parameters in tables and CSV headers (ASCII so spreadsheets agree).
 PARAM_UNITS = {
@@ -775,12 +782,16 @@ def parse_library(data, source: str) -> dict[str, HolderEntry]:
         found = data.get("schema") if isinstance(data, dict) else None
         what = f"schema {found!r}" if found is not None else "no \"schema\": \"taptune-holder-library\" key"
         raise LibraryFormatError(f"{source}: is not a taptune holder library ({what})")
-    _object(data, source, "", ("schema", "version", "holders"))
+    if "version" not in data:
+        _fail(source, "version", "is missing")
     version = data["version"]
     if isinstance(version, bool) or not isinstance(version, int) or version < 1:
         _fail(source, "version", f"must be a positive integer, got {version!r}")
+    # Before any other key: a newer format may have keys this build does not know.
     if version > VERSION:
-        _fail(source, "version", f"is {version}: written by a newer taptune (this one reads version {VERSION})")
+        _fail(source, "version", f"is {version}: written by a newer taptune (this one reads versions 1–{VERSION}); "
+              "update taptune to use it (the file is left as it is)")
+    _object(data, source, "", ("schema", "version", "holders"))
     holders = data["holders"]
     if not isinstance(holders, dict):
         _fail(source, "holders", f"must be a JSON object of holders by name, got {_kind(holders)}")
@@ -796,9 +807,10 @@ def parse_library(data, source: str) -> dict[str, HolderEntry]:
 
 def library_document(entries: dict[str, HolderEntry]) -> dict:
     """The JSON document of a library (holders sorted by name, for stable diffs)."""
+    with_checks = any(entry.checks for entry in entries.values())
     return {
         "schema": SCHEMA,
-        "version": VERSION,
+        "version": VERSION if with_checks else VERSION_WITHOUT_CHECKS,
         "holders": {name: entries[name].to_dict() for name in sorted(entries)},
     }
 

@@ -52,6 +52,7 @@ def test_append_check_adds_one_record_and_changes_nothing_else(lib):
     append_check(lib, "another holder", make_check(3))
     after = json.loads(lib.path.read_text())
     assert after["holders"]["another holder"].pop("checks") == [make_check(3).to_dict()]
+    assert (before.pop("version"), after.pop("version")) == (1, 2)  # checks make it format 2
     assert after == before
     with pytest.raises(UnknownHolderError):
         append_check(lib, "nope", make_check(4))
