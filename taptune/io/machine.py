@@ -39,6 +39,14 @@ FRF_COLUMNS = ("f_hz", "re", "im")
 TOOLPOINT_COLUMNS = ("f_hz", "xx_re", "xx_im", "yy_re", "yy_im")
 UFF_SUFFIXES = (".uff", ".unv")
 
+# Plausible ranges: a hammer test or a tap never reaches 1 MHz, and no spindle, holder or
+# tool point is as soft as 1 cm/N. A value beyond them is a unit or column mistake
+# (kHz written as Hz, µm/N as m/N) or a broken file, not a measurement: refused, not used.
+MAX_FREQ_HZ = 1e6
+#: Largest plausible |receptance| per kind of term [SI]: translational w/f [m/N],
+#: cross w/m = θ/f [1/N], rotational θ/m [rad/(N·m)].
+MAX_RECEPTANCE = {"translational": (1e-2, "m/N"), "cross": (1.0, "1/N"), "rotational": (100.0, "rad/(N·m)")}
+
 
 def _interp(source: str, grid: np.ndarray, values: np.ndarray, freq_hz) -> np.ndarray:
     """``values`` (shape (n, ...), complex) on ``freq_hz``, linear in re and im, no extrapolation."""
@@ -210,6 +218,10 @@ def check_frequency_axis(path, freq_hz: np.ndarray, lines=None) -> np.ndarray:
         raise InputError(f"{path}: frequencies must be finite numbers")
     if f[0] <= 0:
         raise InputError(f"{path}: frequencies must be > 0 Hz, the first is {f[0]:g}{where(0)}")
+    if np.any(f > MAX_FREQ_HZ):
+        i = int(np.argmax(f > MAX_FREQ_HZ))
+        raise InputError(f"{path}: frequency {f[i]:g} Hz{where(i)} is above {MAX_FREQ_HZ:g} Hz, "
+                         "far beyond any tap or hammer test (a wrong column or unit?)")
     step = np.diff(f)
     if np.any(step == 0):
         i = int(np.argmax(step == 0)) + 1
@@ -218,6 +230,25 @@ def check_frequency_axis(path, freq_hz: np.ndarray, lines=None) -> np.ndarray:
         i = int(np.argmax(step < 0)) + 1
         raise InputError(f"{path}: frequencies must ascend, {f[i]:g} Hz follows {f[i - 1]:g} Hz{where(i)}")
     return f
+
+
+def check_receptance(path, name: str, kind: str, freq_hz: np.ndarray, h: np.ndarray, lines=None) -> np.ndarray:
+    """``h`` if every |value| is plausible for a receptance of ``kind`` (:data:`MAX_RECEPTANCE`).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the row (line number, else frequency), the term and the limit.
+    """
+    h = np.asarray(h)
+    limit, unit = MAX_RECEPTANCE[kind]
+    big = np.abs(h) > limit
+    if np.any(big):
+        i = int(np.argmax(big))
+        row = f"line {int(lines[i])}" if lines is not None else f"at {float(freq_hz[i]):g} Hz"
+        raise InputError(f"{path}: {row}: |{name}| = {abs(h[i]):.3g} {unit} is not a plausible receptance "
+                         f"(a machine stays far below {limit:g} {unit}; the file must be in SI, {unit})")
+    return h
 
 
 def _atomic_write_text(path, text: str, what: str) -> None:
@@ -261,9 +292,12 @@ def read_spindle(path) -> SpindleReceptance:
         return _read_spindle_uff(path)
     c = read_csv_columns(path, SPINDLE_COLUMNS, "a spindle receptance file")
     f = check_frequency_axis(path, c["f_hz"], c["_lines"])
-    return SpindleReceptance.from_terms(
-        f, c["h_wf_re"] + 1j * c["h_wf_im"], c["h_wm_re"] + 1j * c["h_wm_im"], c["h_tm_re"] + 1j * c["h_tm_im"], str(path)
-    )
+    terms = [check_receptance(path, f"h_{key}", kind, f, c[f"h_{key}_re"] + 1j * c[f"h_{key}_im"], c["_lines"])
+             for key, kind in _SPINDLE_TERMS]
+    return SpindleReceptance.from_terms(f, *terms, str(path))
+
+
+_SPINDLE_TERMS = (("wf", "translational"), ("wm", "cross"), ("tm", "rotational"))
 
 
 def write_spindle_csv(path, spindle: SpindleReceptance, comments=()) -> None:
@@ -321,7 +355,8 @@ def _read_spindle_uff(path) -> SpindleReceptance:
     missing = [k for k in ("wf", "wm", "tm") if k not in terms]
     if missing:
         raise InputError(f"{path}: needs three FRF datasets 58 (h_wf, h_wm, h_tm); missing {', '.join('h_' + k for k in missing)}")
-    return SpindleReceptance.from_terms(freq, terms["wf"], terms["wm"], terms["tm"], str(path))
+    terms = [check_receptance(path, f"h_{key}", kind, freq, terms[key]) for key, kind in _SPINDLE_TERMS]
+    return SpindleReceptance.from_terms(freq, *terms, str(path))
 
 
 # --------------------------------------------------------------------------- dummy-holder FRFs
@@ -335,11 +370,12 @@ def read_frf(path) -> Frf:
         if len(sets) != 1:
             raise InputError(f"{path}: needs exactly one FRF dataset 58, found {len(sets)}")
         f, h = _uff_frf(path, sets[0])
-        return Frf(f, h, str(path))
+        return Frf(f, check_receptance(path, "w/f", "translational", f, h), str(path))
     if suffix == ".frf":
         return _read_frf_text(path)
     c = read_csv_columns(path, FRF_COLUMNS, "an FRF file")
-    return Frf(check_frequency_axis(path, c["f_hz"], c["_lines"]), c["re"] + 1j * c["im"], str(path))
+    f = check_frequency_axis(path, c["f_hz"], c["_lines"])
+    return Frf(f, check_receptance(path, "w/f", "translational", f, c["re"] + 1j * c["im"], c["_lines"]), str(path))
 
 
 def _read_frf_text(path) -> Frf:
@@ -356,7 +392,8 @@ def _read_frf_text(path) -> Frf:
     if not rows:
         raise InputError(f"{path}: holds no data (expected lines of frequency, real, imaginary)")
     data = np.array(rows)
-    return Frf(check_frequency_axis(path, data[:, 0], linenos), data[:, 1] + 1j * data[:, 2], str(path))
+    f = check_frequency_axis(path, data[:, 0], linenos)
+    return Frf(f, check_receptance(path, "w/f", "translational", f, data[:, 1] + 1j * data[:, 2], linenos), str(path))
 
 
 # --------------------------------------------------------------------------- tool-point FRF
@@ -366,11 +403,11 @@ def read_toolpoint_csv(path) -> ToolpointFrf:
     """Tool-point FRFs from CSV ``f_hz,xx_re,xx_im[,yy_re,yy_im]`` (y = x when yy is absent)."""
     c = read_csv_columns(path, TOOLPOINT_COLUMNS[:3], "a tool-point FRF file", optional=TOOLPOINT_COLUMNS[3:])
     f = check_frequency_axis(path, c["f_hz"], c["_lines"])
-    xx = c["xx_re"] + 1j * c["xx_im"]
+    xx = check_receptance(path, "xx", "translational", f, c["xx_re"] + 1j * c["xx_im"], c["_lines"])
     has_y = [k in c for k in TOOLPOINT_COLUMNS[3:]]
     if any(has_y) and not all(has_y):
         raise InputError(f"{path}: has only one of yy_re, yy_im; give both or neither (y = x)")
-    yy = c["yy_re"] + 1j * c["yy_im"] if all(has_y) else xx
+    yy = check_receptance(path, "yy", "translational", f, c["yy_re"] + 1j * c["yy_im"], c["_lines"]) if all(has_y) else xx
     return ToolpointFrf(f, xx, yy, str(path), y_from_x=not all(has_y))
 
 

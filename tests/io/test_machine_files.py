@@ -58,10 +58,10 @@ def test_spindle_at_interpolates_and_refuses_to_extrapolate(tmp_path):
 
 def test_spindle_csv_accepts_comments_blank_lines_extra_columns(tmp_path):
     p = write(tmp_path, "s.csv", "# note\n\n" + HEADER + ",extra\n"
-              "100,1,2,3,4,5,6,7\n# mid comment\n200,1,2,3,4,5,6,7\n")
+              "100,1e-8,2e-8,3e-7,4e-7,5e-6,6e-6,7\n# mid comment\n200,1e-8,2e-8,3e-7,4e-7,5e-6,6e-6,7\n")
     s = read_spindle(p)
     assert s.h.shape == (2, 2, 2)
-    assert s.h[1, 1, 1] == 5 + 6j
+    assert s.h[1, 1, 1] == 5e-6 + 6e-6j
 
 
 @pytest.mark.parametrize("body, message", [
@@ -233,7 +233,7 @@ def test_toolpoint_round_trip_and_y_from_x(tmp_path):
     only_x = write(tmp_path, "x.csv", "f_hz,xx_re,xx_im\n200,1e-8,-1e-9\n300,2e-8,-2e-9\n")
     t = read_toolpoint_csv(only_x)
     assert t.y_from_x and np.array_equal(t.yy, t.xx)
-    half = write(tmp_path, "half.csv", "f_hz,xx_re,xx_im,yy_re\n200,1,2,3\n300,1,2,3\n")
+    half = write(tmp_path, "half.csv", "f_hz,xx_re,xx_im,yy_re\n200,1e-8,2e-8,3e-8\n300,1e-8,2e-8,3e-8\n")
     with pytest.raises(InputError, match=r"half.csv: has only one of yy_re, yy_im"):
         read_toolpoint_csv(half)
     with pytest.raises(InputError, match=r"missing column xx_im"):
@@ -246,3 +246,47 @@ def test_writer_refuses_bad_arrays_and_unwritable_paths(tmp_path):
     (tmp_path / "dir.csv").mkdir()
     with pytest.raises(InputError, match=r"dir.csv: cannot write the tool-point FRF"):
         write_toolpoint_csv(tmp_path / "dir.csv", [1.0, 2.0], [1j, 1j], [1j, 2j])
+
+
+PLAUSIBLE = "1e-8,-2e-8,3e-7,-4e-7,5e-6,-6e-6"
+
+
+@pytest.mark.parametrize("rows, message", [
+    # 1e300 m/N, kHz written as Hz, µm/N written as m/N: refused with the file, the line and the term.
+    ([f"100,{PLAUSIBLE}", f"200,1e300,0,3e-7,0,5e-6,0"], r"bad.csv: line 3: \|h_wf\| = 1e\+300 m/N is not a plausible"),
+    ([f"100,{PLAUSIBLE}", f"2e9,{PLAUSIBLE}"], r"bad.csv: frequency 2e\+09 Hz \(line 3\) is above 1e\+06 Hz"),
+    ([f"100,{PLAUSIBLE}", f"200,0.05,-0.02,3e-7,0,5e-6,0"], r"line 3: \|h_wf\| = 0.0539 m/N .* in SI, m/N"),
+    ([f"100,1e-8,0,2e3,0,5e-6,0", f"200,{PLAUSIBLE}"], r"line 2: \|h_wm\| = 2e\+03 1/N"),
+    ([f"100,1e-8,0,3e-7,0,-1e9,0", f"200,{PLAUSIBLE}"], r"line 2: \|h_tm\| = 1e\+09 rad/\(N·m\)"),
+    ([f"-100,{PLAUSIBLE}", f"200,{PLAUSIBLE}"], r"frequencies must be > 0 Hz, the first is -100 \(line 2\)"),
+    ([f"100,{PLAUSIBLE}", f"200,nan,0,0,0,0,0"], r"line 3, column h_wf_re: nan is not a finite number"),
+])
+def test_absurd_spindle_numbers_are_refused_naming_file_and_row(tmp_path, rows, message):
+    p = write(tmp_path, "bad.csv", HEADER + "\n" + "\n".join(rows) + "\n")
+    with pytest.raises(InputError, match=message) as err:
+        read_spindle(p)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("g.csv", "f_hz,re,im\n100,1e-8,0\n200,1e300,0\n", r"g.csv: line 3: \|w/f\| = 1e\+300 m/N"),
+    ("g.frf", "100 1e-8 0\n200 -3 0\n", r"g.frf: line 2: \|w/f\| = 3 m/N"),
+    ("t.csv", "f_hz,xx_re,xx_im,yy_re,yy_im\n100,1e-8,0,1e-8,0\n200,1e-8,0,0,7\n", r"t.csv: line 3: \|yy\| = 7 m/N"),
+])
+def test_absurd_frf_values_are_refused_in_every_reader(tmp_path, name, text, message):
+    from taptune.io.machine import read_toolpoint_csv
+
+    reader = read_toolpoint_csv if name.startswith("t") else read_frf
+    with pytest.raises(InputError, match=message):
+        reader(write(tmp_path, name, text))
+
+
+def test_a_uff_spindle_with_an_absurd_value_names_the_frequency(tmp_path):
+    pytest.importorskip("pyuff")
+    s = spindle(5)
+    h = s.h.copy()
+    h[2, 0, 0] = 1e300
+    path = write_uff(tmp_path / "s.uff", [uff_set(s.freq_hz, h[:, 0, 0], 1, 1), uff_set(s.freq_hz, h[:, 0, 1], 1, 5),
+                                          uff_set(s.freq_hz, h[:, 1, 1], 5, 5)])
+    with pytest.raises(InputError, match=rf"s.uff: at {s.freq_hz[2]:g} Hz: \|h_wf\| = 1e\+300 m/N"):
+        read_spindle(path)
