@@ -47,7 +47,7 @@ def add_parser(sub, name, help_text):
 
 
 def _check(args) -> None:
-    from taptune.cli.common import output_path
+    from taptune.cli.common import command_inputs, output_path
     from taptune.errors import InputError
 
     if args.timeout is not None and not args.timeout > 0:
@@ -59,7 +59,7 @@ def _check(args) -> None:
     setup = machine_setup(args)  # before anything is written
 
     # Even with --no-save: a report written over the library file would destroy it.
-    output_path(args.report, "report", library=args.library)
+    output_path(args.report, "report", library=args.library, inputs=command_inputs(args))
     return setup
 
 

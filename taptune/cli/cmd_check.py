@@ -51,14 +51,14 @@ def print_check(check, stream=None) -> None:
 
 
 def run(args) -> int:
-    from taptune.cli.common import output_path, write_json
+    from taptune.cli.common import command_inputs, output_path, write_json
     from taptune.io.assembly import load_assembly
     from taptune.io.audio import read_audio
     from taptune.library.checks import check_holder
     from taptune.library.store import HolderLibrary, default_library_path
 
     library = HolderLibrary(default_library_path(args.library))
-    output_path(args.json, "JSON", protect=(library.path,), library=args.library)
+    output_path(args.json, "JSON", protect=(library.path,), library=args.library, inputs=command_inputs(args))
     assembly = load_assembly(args.assembly)
     entry = library.get(args.holder)  # an unknown holder or a broken library: before the analysis
     recording = read_audio(args.wav)

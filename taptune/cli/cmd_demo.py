@@ -66,14 +66,14 @@ def load_manifest(folder: Path) -> list[dict]:
 def run(args) -> int:
     from taptune.cli.cmd_identify import run_identification
     from taptune.cli.cmd_predict import predict_stickouts
-    from taptune.cli.common import ProgressBar, format_table, output_path, write_json
+    from taptune.cli.common import ProgressBar, command_inputs, format_table, output_path, write_json
     from taptune.errors import InputError
     from taptune.io.assembly import load_assembly
     from taptune.io.audio import read_audio
     from taptune.library.record import save_identification
     from taptune.library.store import HolderLibrary
 
-    output_path(args.json, "JSON", library=args.library)  # now, not after the identifications
+    output_path(args.json, "JSON", library=args.library, inputs=command_inputs(args))  # now, not after the identifications
     folder = Path(args.recordings) if args.recordings else bundled_recordings()
     cases = load_manifest(folder)
     if args.case:

@@ -38,10 +38,10 @@ def add_parser(sub, name: str, help_text: str) -> None:
 
 
 def run(args) -> int:
-    from taptune.cli.common import output_path
+    from taptune.cli.common import command_inputs, output_path
     from taptune.errors import InputError
 
-    output_path(args.screenshot, "screenshot", library=args.library)  # a folder or an unwritable place: now, not after the window
+    output_path(args.screenshot, "screenshot", library=args.library, inputs=command_inputs(args))  # a folder or an unwritable place: now, not after the window
     for wav in (args.wav, args.second):
         if wav and not Path(wav).is_file():
             raise InputError(f"{wav}: no such file")

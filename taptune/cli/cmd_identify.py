@@ -78,7 +78,7 @@ def print_summary(out: dict, result, stream=None) -> None:
 
 
 def run(args) -> int:
-    from taptune.cli.common import ProgressBar, output_path, write_json
+    from taptune.cli.common import ProgressBar, command_inputs, output_path, write_json
     from taptune.identify.pipeline import identification_record
     from taptune.identify.optimize import Cancelled
 
@@ -86,7 +86,7 @@ def run(args) -> int:
 
     library = None if args.no_save else default_library_path(args.library)
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
-        output_path(path, what, library=args.library)
+        output_path(path, what, library=args.library, inputs=command_inputs(args))
     recordings, assemblies = load_inputs(args.wav, args.assembly)
     if library is not None:
         # A broken library is reported before the fit, not after it.

@@ -64,12 +64,12 @@ def frf_input(args):
 
 
 def run(args) -> int:
-    from taptune.cli.common import format_table, output_path, write_json
+    from taptune.cli.common import command_inputs, format_table, output_path, write_json
     from taptune.errors import InputError
     from taptune.machine import stability_lobes
 
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.plot, "plot")):
-        output_path(path, what, library=args.library)
+        output_path(path, what, library=args.library, inputs=command_inputs(args))
     cut = cut_options(args)  # the whole cut checked before the tool-point FRF is computed
     if args.frf and args.diameter is None:
         raise InputError("--frf needs --diameter MM (the tool diameter)")

@@ -92,13 +92,13 @@ def report(result, bounds, assembly, source: str, path: str) -> str:
 
 
 def run(args) -> int:
-    from taptune.cli.common import output_path, write_json
+    from taptune.cli.common import command_inputs, output_path, write_json
     from taptune.io.assembly import load_assembly
     from taptune.model.bounds import bending_bounds
     from taptune.model.fe import build_model
     from taptune.model.modes import analyse
 
-    output_path(args.json, "JSON", library=args.library)
+    output_path(args.json, "JSON", library=args.library, inputs=command_inputs(args))
     assembly = load_assembly(args.assembly)
     params, options, source = holder_params(args)
     fe = build_model(assembly, options)

@@ -26,13 +26,13 @@ def predict_stickouts(entry, assembly, stickouts_mm=None):
 
 
 def run(args) -> int:
-    from taptune.cli.common import format_table, output_path, write_json
+    from taptune.cli.common import command_inputs, format_table, output_path, write_json
     from taptune.identify.bands import second_tap_advice
     from taptune.io.assembly import load_assembly
     from taptune.library.store import HolderLibrary, default_library_path
 
-    output_path(args.json, "JSON", library=args.library)
-    output_path(args.plot, "plot", library=args.library)
+    output_path(args.json, "JSON", library=args.library, inputs=command_inputs(args))
+    output_path(args.plot, "plot", library=args.library, inputs=command_inputs(args))
     assembly = load_assembly(args.assembly)
     entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
     warnings = list(assembly.warnings)

@@ -39,9 +39,9 @@ def run(args) -> int:
             return 0
         if not args.out:
             raise InputError("--out WAV is required (where to save the taps)")
-        from taptune.cli.common import output_path
+        from taptune.cli.common import command_inputs, output_path
 
-        output_path(args.out, "recording", create=False)
+        output_path(args.out, "recording", create=False, inputs=command_inputs(args))
         if args.taps <= 0 or args.seconds <= 0 or args.sample_rate <= 0:
             raise InputError("--taps, --seconds and --sample-rate must be > 0")
         assembly_text = None

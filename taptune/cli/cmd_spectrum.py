@@ -48,12 +48,12 @@ def print_summary(analysis, stream=None) -> None:
 def run(args) -> int:
     from dataclasses import replace
 
-    from taptune.cli.common import output_path, write_json
+    from taptune.cli.common import command_inputs, output_path, write_json
     from taptune.io.audio import read_audio
     from taptune.signal.analysis import SpectrumOptions, analyse_recording
 
-    output_path(args.json, "JSON")
-    output_path(args.plot, "plot")
+    output_path(args.json, "JSON", inputs=command_inputs(args))
+    output_path(args.plot, "plot", inputs=command_inputs(args))
     recording = read_audio(args.wav)
     interface_tap = read_audio(args.interface_tap) if args.interface_tap else None
     options = SpectrumOptions()

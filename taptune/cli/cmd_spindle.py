@@ -79,7 +79,7 @@ def untrusted_bands(freq_hz, trusted) -> list[tuple[float, float]]:
 def run(args) -> int:
     from pathlib import Path
 
-    from taptune.cli.common import output_path, write_json
+    from taptune.cli.common import command_inputs, output_path, write_json
     from taptune.errors import InputError
     from taptune.io.assembly import load_holder
     from taptune.io.machine import write_spindle_csv
@@ -88,7 +88,7 @@ def run(args) -> int:
     if Path(args.out).suffix.lower() != ".csv":
         raise InputError(f"--out {args.out}: the spindle receptance is written as CSV; name the file .csv")
     for path, what in ((args.out, "spindle receptance"), (args.json, "JSON"), (args.plot, "plot")):
-        output_path(path, what)
+        output_path(path, what, inputs=command_inputs(args))
     smooth = smoothing(args.smooth)
     dummy = load_holder(args.dummy)
     freq, g_aa, g_ab, g_bb = read_measurements(args)

@@ -172,11 +172,11 @@ def mode_rows(frf) -> list[list[str]]:
 
 
 def run(args) -> int:
-    from taptune.cli.common import format_table, output_path, write_json
+    from taptune.cli.common import command_inputs, format_table, output_path, write_json
     from taptune.io.machine import write_toolpoint_csv
 
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.uff, "universal file"), (args.plot, "plot")):
-        output_path(path, what, library=args.library)
+        output_path(path, what, library=args.library, inputs=command_inputs(args))
     assembly, machine, holder, warnings = machine_inputs(args, "toolpoint")
     freq = frequency_grid(args, machine)
     frfs, assemblies = toolpoint_frfs(assembly, machine, holder, freq, args.stickout, args.contact)

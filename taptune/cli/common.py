@@ -104,11 +104,29 @@ def refuse_library_output(path: str | os.PathLike | None, what: str, library=Non
             raise InputError(f"{path}: is the holder library's lock file; choose another name for the {what}")
 
 
-def output_path(path: str | None, what: str, protect=(), library=None, create: bool = True) -> str | None:
+# Options and arguments that name files a command reads (never to be overwritten by its outputs).
+_INPUT_ARGS = ("wav", "assembly", "params", "machine", "frf", "dummy", "aa", "ab", "bb", "bands",
+               "interface_tap", "file", "spindle", "paths")
+
+
+def command_inputs(args) -> list[str]:
+    """The files a command's arguments name as inputs (recordings, assembly, machine files …)."""
+    out: list[str] = []
+    for name in _INPUT_ARGS:
+        value = getattr(args, name, None)
+        values = value if isinstance(value, (list, tuple)) else [value]
+        out += [str(v) for v in values if isinstance(v, (str, os.PathLike)) and str(v) not in ("", "-")]
+    return out
+
+
+def output_path(path: str | None, what: str, protect=(), library=None, create: bool = True,
+                inputs=()) -> str | None:
     """Make sure an output file can be written before any long work.
 
     Not a folder, not the holder library (:func:`refuse_library_output`, with ``library``
-    the command's ``--library`` value and ``protect`` further library files), and its
+    the command's ``--library`` value and ``protect`` further library files), not one of
+    the command's ``inputs`` (:func:`command_inputs`: ``--json tap.wav`` replaced the
+    recording), and its
     folder exists (created here) or, with ``create=False``, could be created (nothing
     is written: ``taptune record`` writes nothing before the first tap).
     """
@@ -118,6 +136,9 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
     if target.is_dir():
         raise InputError(f"{path}: is a folder; give a file name for the {what}")
     refuse_library_output(path, what, library, protect)
+    for source in inputs:
+        if _same_file(Path(path), Path(source)):
+            raise InputError(f"{path}: is also an input of this command; writing the {what} there would destroy it")
     if not create:
         check_writable(path)
         return path

@@ -132,3 +132,28 @@ def test_record_into_a_read_only_folder_is_refused_before_listening(monkeypatch,
         assert list(locked.iterdir()) == []
     finally:
         locked.chmod(0o755)
+
+
+# --------------------------------------------------------------------------- an output is never an input
+
+
+@pytest.mark.parametrize("argv", [
+    ["spectrum", "{wav}", "--json", "{wav}"],
+    ["spectrum", "{wav}", "--assembly", "{toml}", "--plot", "{toml}"],
+    ["model", "{toml}", "--json", "{toml}"],
+    ["identify", "{wav}", "--assembly", "{toml}", "--no-save", "--json", "{wav}"],
+    ["predict", "{toml}", "--holder", "x", "--json", "{toml}"],
+    ["check", "{wav}", "--assembly", "{toml}", "--holder", "x", "--json", "{wav}"],
+    ["record", "--out", "{toml}", "--assembly", "{toml}"],
+    ["batch", "{wav}", "--assembly", "{toml}", "--report", "{wav}"],
+])
+def test_an_output_onto_one_of_the_inputs_is_refused_and_the_input_kept(argv, tmp_path, reference_toml, capsys):
+    # Before, spectrum --json tap.wav replaced the recording with JSON and model --json
+    # a.toml the assembly file, exit 0.
+    wav = tmp_path / "tap.wav"
+    wav.write_bytes(b"RIFF not really audio")
+    before = {p: p.read_bytes() for p in (wav, reference_toml)}
+    argv = [a.format(wav=wav, toml=reference_toml) for a in argv] + ["--library", str(tmp_path / "lib.json")] * (
+        argv[0] in ("identify", "predict", "check", "batch", "model"))
+    one_line_exit_2(capsys, main(argv), "is also an input of this command")
+    assert {p: p.read_bytes() for p in before} == before
