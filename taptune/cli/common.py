@@ -142,6 +142,11 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
     if not create:
         check_writable(path)
         return path
+    folder = target.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise InputError(f"{path}: cannot write the {what} ({folder} is a file, not a folder)")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:

@@ -16,6 +16,12 @@ DEFAULT_STEP_RPM = 10.0
 # 60 f_c / N, which is the highest pocket a cut can have.
 TOP_POCKET_MARGIN = 1.2
 # The options of the cut, as argparse destinations, with the flag a message names.
+# Plausible ranges: beyond them a number is a typo or a unit mistake (µm for mm, Pa for
+# MPa), refused rather than turned into a lobe diagram. The largest face mills are ~500 mm;
+# hardened steels and titanium stay below 10 000 MPa of K_tc.
+MAX_TEETH = 200
+MAX_DIAMETER_MM = 1000.0
+MAX_COEFFICIENT_MPA = 20000.0
 CUT_FLAGS = {"teeth": "--teeth", "ktc": "--ktc", "krc": "--krc", "material": "--material",
              "diameter": "--diameter", "ae": "--ae", "milling": "--milling", "rpm": "--rpm"}
 
@@ -94,14 +100,17 @@ def cut_options(args) -> CutOptions:
     missing = [CUT_FLAGS[k] for k in ("teeth", "ae", "milling") if getattr(args, k, None) is None]
     if missing:
         raise InputError(f"the cut needs {', '.join(missing)}")
-    if args.teeth < 1:
-        raise InputError(f"--teeth must be >= 1, got {args.teeth}")
+    if not 1 <= args.teeth <= MAX_TEETH:
+        raise InputError(f"--teeth must lie in 1…{MAX_TEETH}, got {args.teeth}")
     ktc, krc, coefficients = cutting_coefficients(args)
-    if not args.ae > 0:
-        raise InputError(f"--ae must be > 0 mm, got {args.ae:g}")
+    for flag, value in (("--ktc", args.ktc), ("--krc", args.krc)):
+        if value is not None and not (0 <= value <= MAX_COEFFICIENT_MPA):
+            raise InputError(f"{flag} must lie in 0…{MAX_COEFFICIENT_MPA:g} MPa (N/mm², not Pa), got {value:g}")
+    if not 0 < args.ae <= MAX_DIAMETER_MM:
+        raise InputError(f"--ae must be > 0 mm (and at most {MAX_DIAMETER_MM:g}), got {args.ae:g}")
     if args.diameter is not None:
-        if not args.diameter > 0:
-            raise InputError(f"--diameter must be > 0 mm, got {args.diameter:g}")
+        if not 0 < args.diameter <= MAX_DIAMETER_MM:
+            raise InputError(f"--diameter must be > 0 mm and at most {MAX_DIAMETER_MM:g} mm, got {args.diameter:g}")
         if args.ae > args.diameter * (1 + 1e-9):
             raise InputError(f"--ae {args.ae:g} mm exceeds the tool diameter {args.diameter:g} mm")
     rpm = tuple(args.rpm) if getattr(args, "rpm", None) else None

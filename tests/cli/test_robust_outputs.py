@@ -157,3 +157,26 @@ def test_an_output_onto_one_of_the_inputs_is_refused_and_the_input_kept(argv, tm
         argv[0] in ("identify", "predict", "check", "batch", "model"))
     one_line_exit_2(capsys, main(argv), "is also an input of this command")
     assert {p: p.read_bytes() for p in before} == before
+
+
+# --------------------------------------------------------------------------- the cut: plausible numbers only
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--diameter", "1e9"], "--diameter must be > 0 mm and at most 1000 mm, got 1e+09"),
+    (["--diameter", "inf"], "--diameter must be > 0 mm and at most 1000 mm, got inf"),
+    (["--ae", "nan"], "--ae must be > 0 mm (and at most 1000), got nan"),
+    (["--teeth", "5000"], "--teeth must lie in 1…200, got 5000"),
+    (["--ktc", "9e8", "--krc", "200"], "--ktc must lie in 0…20000 MPa (N/mm², not Pa), got 9e+08"),
+])
+def test_an_absurd_cut_is_refused_before_any_work(flags, message, tmp_path, capsys):
+    # Before, --diameter 1e9 drew a lobe diagram from a one-kilometre cutter.
+    frf = tmp_path / "frf.csv"
+    frf.write_text("f_hz,xx_re,xx_im\n100,1e-8,-1e-9\n200,2e-8,-2e-9\n")
+    base = {"--teeth": "4", "--ae": "2", "--diameter": "16", "--material": "al7075"}
+    if "--ktc" in flags:
+        base.pop("--material")
+    for flag, value in zip(flags[::2], flags[1::2]):
+        base[flag] = value
+    argv = ["lobes", "--frf", str(frf), "--milling", "down"] + [x for kv in base.items() for x in kv]
+    one_line_exit_2(capsys, main(argv), message)
