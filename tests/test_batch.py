@@ -171,6 +171,17 @@ def test_plan_with_nothing_to_do_is_bad_input(tmp_path):
         plan([tmp_path], BatchOptions(out_dir=tmp_path / "out"))
 
 
+def test_an_output_folder_that_is_a_file_is_named_as_such_and_kept(tmp_path):
+    # Before: "cannot create the output folder (File exists)".
+    out = tmp_path / "results"
+    out.write_text("my notes")
+    wav = tmp_path / "x.wav"
+    wav.write_bytes(b"x")
+    with pytest.raises(InputError, match=r"results: is a file, not a folder; --out needs a folder"):
+        run_batch([wav], BatchOptions(out_dir=str(out), save=False))
+    assert out.read_text() == "my notes"
+
+
 def test_a_result_that_would_overwrite_the_library_is_refused_before_any_work(tmp_path):
     # holders.wav's result JSON is out/holders.json: the library itself when --out is its folder.
     (tmp_path / "rec").mkdir()

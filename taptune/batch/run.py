@@ -46,6 +46,8 @@ def run_batch(
         or a library file that does not validate.
     """
     out_dir = Path(options.out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: is a file, not a folder; --out needs a folder for the results")
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as err:
