@@ -42,8 +42,14 @@ def run(args) -> int:
         from taptune.cli.common import command_inputs, output_path
 
         output_path(args.out, "recording", create=False, inputs=command_inputs(args))
-        if args.taps <= 0 or args.seconds <= 0 or args.sample_rate <= 0:
-            raise InputError("--taps, --seconds and --sample-rate must be > 0")
+        if args.taps <= 0 or not 0 < args.seconds < float("inf"):
+            raise InputError(f"--taps and --seconds must be > 0 (and finite), got {args.taps} and {args.seconds:g}")
+        from taptune.io.audio import MIN_SAMPLE_RATE
+
+        # Below 8 kHz the bending modes are not in the recording; above 384 kHz no sound card.
+        if not MIN_SAMPLE_RATE <= args.sample_rate <= 384000:
+            raise InputError(f"--sample-rate must lie in {MIN_SAMPLE_RATE}…384000 Hz (48000 recommended), "
+                             f"got {args.sample_rate}")
         assembly_text = None
         if args.assembly:
             from taptune.io.assembly import assembly_from_toml

@@ -180,3 +180,15 @@ def test_an_absurd_cut_is_refused_before_any_work(flags, message, tmp_path, caps
         base[flag] = value
     argv = ["lobes", "--frf", str(frf), "--milling", "down"] + [x for kv in base.items() for x in kv]
     one_line_exit_2(capsys, main(argv), message)
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--seconds", "nan"], "--taps and --seconds must be > 0 (and finite), got 5 and nan"),
+    (["--taps", "0"], "--taps and --seconds must be > 0"),
+    (["--sample-rate", "1000"], "--sample-rate must lie in 8000…384000 Hz"),
+])
+def test_record_refuses_impossible_settings_before_listening(flags, message, monkeypatch, tmp_path, capsys):
+    # Before, --seconds nan listened for no time and said "no tap heard in nan s" (exit 1).
+    monkeypatch.setattr(recording, "input_devices", lambda: [InputDevice(4, "Fake USB mic", 1, 48000.0)])
+    one_line_exit_2(capsys, main(["record", "--out", str(tmp_path / "x.wav")] + flags), message)
+    assert list(tmp_path.iterdir()) == []
