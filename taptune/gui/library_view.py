@@ -195,7 +195,14 @@ class LibraryView(QWidget):
         """Export the library (JSON or CSV from the suffix); a dialog reports the outcome."""
         from taptune.errors import TaptuneError
 
+        from taptune.library.store import default_library_path
+
         format = format or ("csv" if str(path).lower().endswith(".csv") else "json")
+        default = default_library_path()
+        if Path(path).expanduser().resolve() == default.expanduser().resolve() and default != self.library_path:
+            # Exporting another library over the default one would replace the user's holders.
+            show_error(self, "Export failed", f"{path}: is the holder library; exporting there would destroy it")
+            return None
         try:
             count = self.library.export(path, format=format)
         except TaptuneError as err:
