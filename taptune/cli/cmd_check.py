@@ -61,6 +61,10 @@ def run(args) -> int:
     output_path(args.json, "JSON", protect=(library.path,), library=args.library, inputs=command_inputs(args))
     assembly = load_assembly(args.assembly)
     entry = library.get(args.holder)  # an unknown holder or a broken library: before the analysis
+    if not args.no_save:
+        from taptune.io.atomic import check_writable
+
+        check_writable(library.path)  # an unwritable library: before the analysis, too
     recording = read_audio(args.wav)
     check = check_holder(recording, assembly, entry.name, library, save=not args.no_save, entry=entry)
     write_json(check.to_dict(), args.json)

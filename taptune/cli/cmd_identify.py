@@ -79,6 +79,7 @@ def print_summary(out: dict, result, stream=None) -> None:
 
 def run(args) -> int:
     from taptune.cli.common import ProgressBar, command_inputs, output_path, write_json
+    from taptune.errors import TaptuneError
     from taptune.identify.pipeline import identification_record
     from taptune.identify.optimize import Cancelled
 
@@ -89,8 +90,11 @@ def run(args) -> int:
         output_path(path, what, library=args.library, inputs=command_inputs(args))
     recordings, assemblies = load_inputs(args.wav, args.assembly)
     if library is not None:
-        # A broken library is reported before the fit, not after it.
+        from taptune.io.atomic import check_writable
+
+        # A broken or unwritable library is reported before the fit, not after it.
         HolderLibrary(library).entries()
+        check_writable(library)
     bar = ProgressBar("identify")
     try:
         analyses, result = run_identification(recordings, assemblies, args.seed, args.jobs, bar)
@@ -106,7 +110,13 @@ def run(args) -> int:
     if not args.no_save:
         from taptune.library.record import save_identification
 
-        name = save_identification(args.library, result, recordings, assemblies)
+        try:
+            name = save_identification(args.library, result, recordings, assemblies)
+        except TaptuneError:
+            # The library could not take it (a disk full, a lock held too long): the fit
+            # is not lost, the JSON still gets it.
+            write_json(out, args.json)
+            raise
         out["library_entry"] = name
     write_json(out, args.json)
     if args.json != "-":

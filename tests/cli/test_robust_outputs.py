@@ -1,6 +1,7 @@
 """Outputs that must not destroy anything: no command writes onto the holder library, and
 ``taptune record`` writes nothing before the first tap."""
 
+import json
 import os
 
 import pytest
@@ -192,3 +193,61 @@ def test_record_refuses_impossible_settings_before_listening(flags, message, mon
     monkeypatch.setattr(recording, "input_devices", lambda: [InputDevice(4, "Fake USB mic", 1, 48000.0)])
     one_line_exit_2(capsys, main(["record", "--out", str(tmp_path / "x.wav")] + flags), message)
     assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- a fit is never lost to the library
+
+
+def _tiny_identification(monkeypatch):
+    """identify with a tiny optimiser budget (the machinery, not the fit, is under test)."""
+    from dataclasses import replace
+
+    from taptune.cli import cmd_identify
+    from taptune.identify import GAOptions, IdentifyOptions
+    from taptune.identify.pipeline import identify_recordings
+
+    def tiny(recordings, assemblies, seed=0, jobs=None, progress=None):
+        options = replace(IdentifyOptions(seed=seed, jobs=1, ga=GAOptions(population=8, generations=2)),
+                          polish_evaluations=20)
+        return identify_recordings(recordings, assemblies, options, progress)
+
+    monkeypatch.setattr(cmd_identify, "run_identification", tiny)
+
+
+@pytest.fixture(scope="module")
+def tap_wav(tmp_path_factory):
+    from tests.library.entries import REFERENCE
+    from taptune.synthetic import write_tap_recording
+
+    return write_tap_recording(tmp_path_factory.mktemp("tap") / "tap.wav", REFERENCE, NOMINAL, seed=3,
+                               sample_rate=96000, mic_lp_hz=None, snr_db=60.0)
+
+
+def test_a_library_that_refuses_the_save_still_gets_the_fit_into_the_json(monkeypatch, tap_wav, reference_toml,
+                                                                          tmp_path, capsys):
+    from taptune.errors import LibraryError
+    from taptune.library import record
+
+    _tiny_identification(monkeypatch)
+
+    def full_disk(*_args, **_kwargs):
+        raise LibraryError("lib.json: cannot write the holder library (No space left on device); it was not changed")
+
+    monkeypatch.setattr(record, "save_identification", full_disk)
+    out = tmp_path / "fit.json"
+    code = main(["identify", str(tap_wav), "--assembly", str(reference_toml), "--library", str(tmp_path / "lib.json"),
+                 "--json", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and "No space left on device" in err and "Traceback" not in err
+    assert set(json.loads(out.read_text())["params"]) >= {"k_tt", "k_rr"}  # before: no JSON, the fit was lost
+
+
+def test_an_unwritable_library_is_refused_before_the_fit(monkeypatch, tap_wav, reference_toml, tmp_path, capsys):
+    from taptune.io import atomic
+
+    calls = []
+    monkeypatch.setattr(atomic.os, "access", lambda path, mode: calls.append(path) and False)
+    code = main(["identify", str(tap_wav), "--assembly", str(reference_toml), "--library",
+                 str(tmp_path / "lib" / "holders.json")])
+    one_line_exit_2(capsys, code, "holders.json: cannot be written (no permission to write into")
+    assert calls
