@@ -24,6 +24,13 @@ MM = 1e-3
 GPA = 1e9
 # Geometry comparisons (fits, equal lengths) are made to this tolerance [m].
 TOL_M = 1e-8
+# Plausible ranges: beyond them a number is a unit mistake (µm or m for mm, Pa for GPa) or
+# a typo, refused before the model meshes it (a 10 km segment hung the model for minutes).
+MAX_LENGTH_M = 2.0          # no tool or holder is longer than 2 m
+MAX_DIAMETER_M = 1.0        # nor thicker than 1 m
+MIN_DIAMETER_M = 10e-6      # nor thinner than 10 µm (the finest micro tools)
+DENSITY_RANGE = (100.0, 30000.0)        # kg/m³: foams … tungsten heavy metal
+MODULUS_RANGE_PA = (0.1e9, 1500e9)      # Pa: polymers … diamond
 
 
 @dataclass(frozen=True)
@@ -192,6 +199,13 @@ def _check_material(m: Material, key: str, fail) -> None:
         fail(f"{key}.density", f"must be > 0 kg/m³, got {m.density:g}")
     if not (m.youngs_modulus > 0 and math.isfinite(m.youngs_modulus)):
         fail(f"{key}.youngs_modulus", f"must be > 0 GPa, got {m.youngs_modulus / GPA:g}")
+    lo, hi = DENSITY_RANGE
+    if not lo <= m.density <= hi:
+        fail(f"{key}.density", f"must lie in {lo:g}…{hi:g} kg/m³ (steel 7800, carbide 15600), got {m.density:g}")
+    lo, hi = MODULUS_RANGE_PA
+    if not lo <= m.youngs_modulus <= hi:
+        fail(f"{key}.youngs_modulus", f"must lie in {lo / GPA:g}…{hi / GPA:g} GPa (steel 210, carbide 580; "
+             f"in GPa, not Pa), got {m.youngs_modulus / GPA:g}")
     # Holder steels and carbide lie near 0.2-0.3; negative ratios (auxetic foams) are no
     # tool material, and near -1 they break the shear coefficient of MODEL.md §3.2.
     if not (0.0 <= m.poisson < 0.5):
@@ -202,9 +216,15 @@ def _check_material(m: Material, key: str, fail) -> None:
 
 def _check_segments(segs, label: str, fail) -> None:
     for i, s in enumerate(segs, 1):
-        for name, value in (("length", s.length), ("od", s.od)):
+        for name, value, top in (("length", s.length, MAX_LENGTH_M), ("od", s.od, MAX_DIAMETER_M)):
             if not (math.isfinite(value) and value > 0):
                 fail(f"{label}[{i}].{name}", f"must be > 0 mm, got {value / MM:g}")
+            if value > top:
+                fail(f"{label}[{i}].{name}", f"({value / MM:g} mm) is implausible: above {top / MM:g} mm "
+                     "(lengths are in mm, not µm)")
+        if s.od < MIN_DIAMETER_M:
+            fail(f"{label}[{i}].od", f"({s.od / MM:g} mm) is implausible: below {MIN_DIAMETER_M / MM:g} mm "
+                 "(diameters are in mm, not m)")
         if not (math.isfinite(s.id) and s.id >= 0):
             fail(f"{label}[{i}].id", f"must be >= 0 mm, got {s.id / MM:g}")
         if s.id >= s.od:
@@ -250,6 +270,8 @@ def validate(asm: Assembly) -> Assembly:
         raise InputError(f"{src}: {key} {problem}")
 
     validate_holder(h, src)
+    if h.length > MAX_LENGTH_M:
+        fail("[holder] segments", f"add up to {h.length / MM:g} mm: implausible, above {MAX_LENGTH_M / MM:g} mm")
     _check_segments(t.segments, "[tool] segments", fail)
     for key, value in (
         ("[tool] total_length", t.total_length),
@@ -257,6 +279,8 @@ def validate(asm: Assembly) -> Assembly:
     ):
         if not (math.isfinite(value) and value > 0):
             fail(key, f"must be > 0 mm, got {value / MM:g}")
+    if t.total_length > MAX_LENGTH_M:
+        fail("[tool] total_length", f"({t.total_length / MM:g} mm) is implausible: above {MAX_LENGTH_M / MM:g} mm")
     _check_material(t.material, "[tool] material", fail)
     seg_sum = sum(s.length for s in t.segments)
     if abs(seg_sum - t.total_length) > 0.01 * MM + TOL_M:
@@ -425,6 +449,9 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
         for key, v in (("shank_diameter", shank), ("flute_length", flute_len), ("flute_diameter", flute_d)):
             if v <= 0:
                 r.fail(f"[tool] {key}", f"must be > 0 mm, got {v / MM:g}")
+            if key.endswith("diameter") and not MIN_DIAMETER_M <= v <= MAX_DIAMETER_M:
+                r.fail(f"[tool] {key}", f"({v / MM:g} mm) is implausible: outside {MIN_DIAMETER_M / MM:g}…"
+                       f"{MAX_DIAMETER_M / MM:g} mm (diameters are in mm)")
         if not 0 < ratio <= 1.5:
             r.fail("[tool] flute_ratio", f"must lie in (0, 1.5], got {ratio:g}")
         if flute_len >= total - TOL_M:
@@ -505,6 +532,8 @@ def _loads(text: str, source: str) -> dict:
 
 def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
     """Parse and validate the TOML text of an assembly file; errors name ``source``."""
+    if not text.strip():
+        raise InputError(f"{source}: is empty (an assembly file has [holder], [tool] and [setup] tables)")
     return parse_assembly(_loads(text, source), source)
 
 
