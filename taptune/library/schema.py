@@ -58,6 +58,7 @@ from taptune.io.assembly import (
     material_to_dict,
     segments_to_list,
     validate,
+    validate_holder,
 )
 from taptune.model.params import NAMES, HolderParams
 
@@ -247,6 +248,12 @@ def check_holder_dict(value, src: str, key: str = "holder") -> dict:
         out["gauge_length"] = _number(h["gauge_length"], src, f"{key}.gauge_length", 0.0)
         if out["gauge_length"] > length * (1 + 1e-9):
             _fail(src, f"{key}.gauge_length", f"({out['gauge_length']:g} mm) exceeds the holder length ({length:g} mm)")
+    # The assembly file's rules too (plausible lengths, diameters and materials), so a
+    # library holder is never one an assembly file could not describe.
+    try:
+        validate_holder(holder_from_dict(out, f"{src}: {key}"), f"{src}: {key}")
+    except InputError as err:
+        raise LibraryFormatError(str(err)) from None
     return out
 
 
