@@ -56,6 +56,9 @@ def _check(args) -> None:
         value = getattr(args, flag)
         if value is not None and value < 1:
             raise InputError(f"--{flag.replace('_', '-')} must be at least 1, got {value}")
+    from taptune.cli.common import check_seed_and_jobs
+
+    check_seed_and_jobs(args)
     setup = machine_setup(args)  # before anything is written
 
     # Even with --no-save: a report written over the library file would destroy it.

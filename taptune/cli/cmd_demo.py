@@ -73,6 +73,9 @@ def run(args) -> int:
     from taptune.library.record import save_identification
     from taptune.library.store import HolderLibrary
 
+    from taptune.cli.common import check_seed_and_jobs
+
+    check_seed_and_jobs(args)
     output_path(args.json, "JSON", library=args.library, inputs=command_inputs(args))  # now, not after the identifications
     folder = Path(args.recordings) if args.recordings else bundled_recordings()
     cases = load_manifest(folder)

@@ -85,6 +85,9 @@ def run(args) -> int:
 
     from taptune.library.store import HolderLibrary, default_library_path
 
+    from taptune.cli.common import check_seed_and_jobs
+
+    check_seed_and_jobs(args)
     library = None if args.no_save else default_library_path(args.library)
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
         output_path(path, what, library=args.library, inputs=command_inputs(args))

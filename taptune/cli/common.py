@@ -154,6 +154,17 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
     return path
 
 
+def check_seed_and_jobs(args) -> None:
+    """``--seed`` must be >= 0 (numpy's seeds are) and ``--jobs`` >= 1 when given: bad input
+    now, not a traceback from a worker (``--seed -1``) or a silent default (``--jobs 0``)."""
+    seed = getattr(args, "seed", None)
+    if seed is not None and seed < 0:
+        raise InputError(f"--seed must be >= 0, got {seed}")
+    jobs = getattr(args, "jobs", None)
+    if jobs is not None and jobs < 1:
+        raise InputError(f"--jobs must be at least 1, got {jobs}")
+
+
 def format_table(rows: list[list[str]], header: list[str]) -> str:
     """An aligned plain-text table."""
     cols = [header] + rows

@@ -251,3 +251,18 @@ def test_an_unwritable_library_is_refused_before_the_fit(monkeypatch, tap_wav, r
                  str(tmp_path / "lib" / "holders.json")])
     one_line_exit_2(capsys, code, "holders.json: cannot be written (no permission to write into")
     assert calls
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["identify", "{wav}", "--assembly", "{toml}", "--no-save", "--seed", "-1"], "--seed must be >= 0, got -1"),
+    (["identify", "{wav}", "--assembly", "{toml}", "--no-save", "--jobs", "0"], "--jobs must be at least 1, got 0"),
+    (["batch", "{wav}", "--assembly", "{toml}", "--no-save", "--seed", "-2", "--out", "{tmp}/out"],
+     "--seed must be >= 0, got -2"),
+    (["demo", "--seed", "-1"], "--seed must be >= 0, got -1"),
+])
+def test_a_negative_seed_or_no_jobs_is_bad_input_not_a_worker_traceback(argv, message, tap_wav, reference_toml,
+                                                                         tmp_path, capsys):
+    # Before, identify --seed -1 ended in a multiprocessing RemoteTraceback (ValueError).
+    argv = [a.format(wav=tap_wav, toml=reference_toml, tmp=tmp_path) for a in argv]
+    one_line_exit_2(capsys, main(argv), message)
+    assert not (tmp_path / "out").exists()
