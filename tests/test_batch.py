@@ -301,6 +301,18 @@ def test_joint_batch_fits_a_holder_once_and_writes_one_json_per_recording(joint_
     assert [r.status for r in single.rows] == ["ok"]
 
 
+def test_a_misspelt_assembly_key_reaches_the_result_json_and_the_summary(tmp_path):
+    # Before, the batch dropped the assembly's warnings: gauge_lenght was ignored without a word.
+    write_case(tmp_path, "a", "ER32 a")
+    toml = tmp_path / "a.toml"
+    toml.write_text(toml.read_text().replace("clamp_length = 40.0", "clamp_length = 40.0\ngauge_lenght = 100.0"))
+    result = run_batch([tmp_path], tiny(tmp_path, save=False))
+    assert [r.status for r in result.rows] == ["ok"]
+    warning = json.loads((tmp_path / "out" / "a.json").read_text())["warnings"][0]
+    assert "unknown key 'gauge_lenght' is ignored; did you mean 'gauge_length'?" in warning
+    assert "gauge_lenght" in read_summary(result.summary_path)[0]["message"]
+
+
 def test_summary_csv_round_trips(tmp_path):
     write_case(tmp_path, "a", "ER32 a")
     result = run_batch([tmp_path], tiny(tmp_path, save=False))
