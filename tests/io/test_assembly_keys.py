@@ -54,3 +54,21 @@ def test_the_cli_shows_the_warning_on_one_line(tmp_path, capsys):
     out = capsys.readouterr()
     lines = [line for line in (out.out + out.err).splitlines() if "gauge_lenght" in line]
     assert len(lines) == 1 and "did you mean 'gauge_length'?" in lines[0]
+
+
+def test_spectrum_carries_the_assembly_warnings(tmp_path, capsys):
+    # Before, spectrum and identify showed none of the assembly's warnings.
+    import json
+
+    from taptune.io.assembly import load_assembly
+    from taptune.model.params import NOMINAL
+    from taptune.synthetic import write_tap_recording
+
+    path = tmp_path / "typo.toml"
+    path.write_text(REFERENCE_TOML.replace("clamp_length = 40.0", "clamp_length = 40.0\ngauge_lenght = 100.0"))
+    wav = write_tap_recording(tmp_path / "tap.wav", load_assembly(path), NOMINAL, seed=1, sample_rate=96000,
+                              mic_lp_hz=None, snr_db=60.0)
+    out = tmp_path / "s.json"
+    assert main(["spectrum", str(wav), "--assembly", str(path), "--json", str(out)]) == 0
+    assert "did you mean 'gauge_length'?" in json.loads(out.read_text())["warnings"][0]
+    assert "did you mean 'gauge_length'?" in capsys.readouterr().out
