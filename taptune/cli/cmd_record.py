@@ -42,6 +42,7 @@ def run(args) -> int:
         from taptune.cli.common import command_inputs, output_path
 
         output_path(args.out, "recording", create=False, inputs=command_inputs(args))
+        recording.record_format(args.out)
         if args.taps <= 0 or not 0 < args.seconds < float("inf"):
             raise InputError(f"--taps and --seconds must be > 0 (and finite), got {args.taps} and {args.seconds:g}")
         from taptune.io.audio import MIN_SAMPLE_RATE

@@ -34,6 +34,21 @@ from taptune.io.atomic import atomic_write, check_writable
 
 # Levels are reported in dB relative to full scale; silence is shown as this floor.
 FLOOR_DBFS = -120.0
+#: What a recording may be saved as, by suffix (lossless 24-bit; lossy formats would low-pass the taps).
+RECORD_FORMATS = {".wav": "WAV", ".flac": "FLAC"}
+
+
+def record_format(path) -> str:
+    """The soundfile format of a recording file by its suffix; InputError for any other suffix.
+
+    Before, every name got WAV data: ``taps.mp3`` or ``taps.flac`` held a WAV under a
+    misleading name.
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix not in RECORD_FORMATS:
+        raise InputError(f"{path}: recordings are saved as .wav or .flac; name the file so "
+                         f"(got {suffix or 'no suffix'})")
+    return RECORD_FORMATS[suffix]
 
 
 def dbfs(amplitude: float) -> float:
@@ -539,6 +554,7 @@ class Recorder:
         with no tap) leaves no files behind. A folder that could never be written is
         refused now, before the user taps.
         """
+        record_format(self.out_path)
         check_writable(self.out_path)
         factory = self._factory or sounddevice_stream
         if self._factory is None:
@@ -608,7 +624,8 @@ class Recorder:
         if self.saved_taps == 0 and self.assembly_toml is not None:
             # With the first tap: the sidecar goes beside the WAV only once there is a WAV.
             _atomic_write_text(self.sidecar_path, self.assembly_toml)
-        _atomic_write_wav(self.out_path, self.trigger.samples(), self.settings.sample_rate)
+        _atomic_write_wav(self.out_path, self.trigger.samples(), self.settings.sample_rate,
+                          record_format(self.out_path))
         self.saved_taps = len(self.trigger.taps)
 
     def close(self) -> None:
@@ -635,11 +652,11 @@ def _atomic_write_text(path: Path, text: str) -> None:
     atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
-def _atomic_write_wav(path: Path, samples: np.ndarray, sample_rate: int) -> None:
-    """Write a 24-bit WAV through a temporary file so a crash never leaves half a file."""
+def _atomic_write_wav(path: Path, samples: np.ndarray, sample_rate: int, format: str = "WAV") -> None:
+    """Write a 24-bit WAV (or FLAC) through a temporary file so a crash never leaves half a file."""
     import soundfile
 
     def write(tmp: Path) -> None:
-        soundfile.write(str(tmp), np.clip(samples, -1.0, 1.0), int(sample_rate), subtype="PCM_24", format="WAV")
+        soundfile.write(str(tmp), np.clip(samples, -1.0, 1.0), int(sample_rate), subtype="PCM_24", format=format)
 
     atomic_write(path, write)

@@ -266,3 +266,16 @@ def test_a_negative_seed_or_no_jobs_is_bad_input_not_a_worker_traceback(argv, me
     argv = [a.format(wav=tap_wav, toml=reference_toml, tmp=tmp_path) for a in argv]
     one_line_exit_2(capsys, main(argv), message)
     assert not (tmp_path / "out").exists()
+
+
+def test_record_writes_flac_as_flac_and_refuses_other_names(monkeypatch, tmp_path, capsys):
+    # Before, --out taps.flac (or taps.mp3) held WAV data under the misleading name.
+    import soundfile
+
+    stream = FakeInputStream(synthetic_taps([0.3]))
+    monkeypatch.setattr(recording, "input_devices", lambda: [InputDevice(4, "Fake USB mic", 1, 48000.0)])
+    monkeypatch.setattr(recording, "default_input_index", lambda: 4)
+    monkeypatch.setattr(recording, "sounddevice_stream", stream.factory)
+    one_line_exit_2(capsys, main(["record", "--out", str(tmp_path / "taps.mp3")]), "saved as .wav or .flac")
+    assert main(["record", "--out", str(tmp_path / "taps.flac"), "--taps", "1"]) == 0
+    assert soundfile.info(tmp_path / "taps.flac").format == "FLAC"
