@@ -4,7 +4,7 @@ Three phases run as tasks on worker processes (or in-process with ``jobs=1``; th
 result is the same, bit for bit):
 
 1. genetic-algorithm islands, each seeded from the master seed;
-2. BOBYQA polishes from each island's best and from diverse good archive points;
+2. least-squares (Gauss–Newton) polishes from each island's best and from diverse good archive points;
 3. the near-optimal set's extent, each parameter pushed low and high inside it
    (:mod:`taptune.identify.uncertainty`).
 
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from taptune.identify.objective import Objective
-from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish
+from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish_least_squares
 from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms
 from taptune.model.params import NAMES, unit_to_p
 
@@ -133,7 +133,7 @@ def ga_task(index: int) -> RunResult:
 
 
 def polish_task(u0: np.ndarray) -> RunResult:
-    """BOBYQA from one start; returns the polished point and its near-optimal trail."""
+    """Least-squares (Gauss–Newton) polish from one start; returns the polished point and its near-optimal trail."""
     objective: Objective = STATE["objective"]
     options = STATE["options"]
     if (stopped := _cancelled(u0)) is not None:
@@ -141,7 +141,8 @@ def polish_task(u0: np.ndarray) -> RunResult:
     archive = Archive()
     start = objective.evaluations
     with _limits():
-        u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
+        u, value, _ = polish_least_squares(lambda x: objective.residuals(unit_to_p(x)), u0, options.polish_evaluations,
+                                           archive=archive)
     au, af = archive.arrays()
     keep = af <= value + near_band(value, options, n_modes(objective))
     return RunResult(u, value, objective.evaluations - start, au[keep], af[keep],
