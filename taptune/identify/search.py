@@ -12,9 +12,10 @@ Two kinds of workers. In a plain process (the CLI) a pool is forked per identifi
 the objective, with its evaluators, is set in :data:`STATE` before the fork, so it is
 built once and shared, never pickled. Forking is unsafe once other threads run (Qt's),
 so an app starts a :class:`WarmPool` once (``spawn``: fresh interpreters) and installs
-it with :func:`set_shared_pool`; each identification then sends its objective pickled
-(≈ 3 MB, 3 ms; rebuilding the evaluator in a worker costs 0.45 s), and each worker
-unpickles it once.
+it with :func:`set_shared_pool`; each identification then writes its objective pickled
+(≈ 3 MB, 3 ms; rebuilding the evaluator in a worker costs 0.45 s) once to a temporary
+file in shared memory (``/dev/shm`` where there is one), every task carries only its
+name, and each worker reads and unpickles it once.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import pickle
+import tempfile
 import threading
 from dataclasses import dataclass
 
@@ -232,12 +234,22 @@ def _warm_up(_):
 
 
 def _remote(args):
-    """Run one task in a warm worker: unpickle this identification's objective once per worker."""
-    fn, key, blob, item = args
+    """Run one task in a warm worker: read this identification's objective once per worker."""
+    fn, key, path, item = args
     if STATE.get("key") != key:
-        objective, options = pickle.loads(blob)
+        with open(path, "rb") as f:
+            objective, options = pickle.load(f)
         STATE.update(objective=objective, options=options, key=key)
     return fn(item)
+
+
+def _shared_file(blob: bytes) -> str:
+    """Write ``blob`` to a new temporary file, in shared memory where there is some; its path."""
+    folder = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else None
+    fd, path = tempfile.mkstemp(prefix="taptune-objective-", suffix=".pkl", dir=folder)
+    with os.fdopen(fd, "wb") as f:
+        f.write(blob)
+    return path
 
 
 class WarmPool:
@@ -322,7 +334,12 @@ class Workers:
             self.counts = _Slots(self.warm.counts, options.islands)
             self.cancel = self.warm.cancel
             self.key = os.urandom(8).hex()
-            self.blob = pickle.dumps((objective, options), protocol=pickle.HIGHEST_PROTOCOL)
+            self.path = None
+            try:
+                self.path = _shared_file(pickle.dumps((objective, options), protocol=pickle.HIGHEST_PROTOCOL))
+            except BaseException:
+                self.warm.lock.release()
+                raise
             return
         self.counts = self.ctx.Array("i", options.islands, lock=False) if self.ctx else [0] * options.islands
         self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
@@ -349,7 +366,7 @@ class Workers:
                     break
         else:
             if self.warm is not None:
-                pending = self.warm.pool.map_async(_remote, [(fn, self.key, self.blob, i) for i in items], chunksize=1)
+                pending = self.warm.pool.map_async(_remote, [(fn, self.key, self.path, i) for i in items], chunksize=1)
             else:
                 pending = self.pool.map_async(fn, items, chunksize=1)
             while not pending.ready():
@@ -365,6 +382,10 @@ class Workers:
 
     def __exit__(self, *exc):
         if self.warm is not None:
+            try:
+                os.unlink(self.path)
+            except OSError:
+                pass
             self.warm.lock.release()
             return False
         if self.pool is not None:
