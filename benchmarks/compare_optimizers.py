@@ -1,7 +1,7 @@
 """How far is taptune's GA from strong references, per evaluation, on real identification problems?
 
-Each method gets the same objective (MODEL.md §8.4, reduced evaluator), the same BOBYQA
-polish and the same near-optimal set (archive members plus the extreme pushes of
+Each method gets the same objective (MODEL.md §8.4, reduced evaluator), the same
+least-squares polish and the same near-optimal set (archive members plus the extreme pushes of
 :mod:`taptune.identify.uncertainty`), so only the global stage differs:
 
 * ``taptune GA``: :func:`taptune.identify.identify` as shipped (islands, polishes, set);
@@ -39,7 +39,7 @@ import numpy as np  # noqa: E402
 from taptune.identify import IdentifyOptions, identify, predict, search  # noqa: E402
 from taptune.identify.core import bending_peaks  # noqa: E402
 from taptune.identify.objective import Objective, make_target  # noqa: E402
-from taptune.identify.optimize import Archive, polish  # noqa: E402
+from taptune.identify.optimize import Archive, polish_least_squares  # noqa: E402
 from taptune.identify.pipeline import analyse_for_assembly  # noqa: E402
 from taptune.io.assembly import load_assembly  # noqa: E402
 from taptune.io.audio import read_audio  # noqa: E402
@@ -108,7 +108,8 @@ def reference(global_stage, budget):
             return value
 
         u0 = global_stage(f, budget, np.random.default_rng(options.seed))
-        u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
+        u, value, _ = polish_least_squares(lambda x: objective.residuals(unit_to_p(x)), u0, options.polish_evaluations,
+                                           archive=archive)
         au, af = archive.arrays()
         keep = af <= value + options.polish_band + search.near_band(value, options, search.n_modes(objective))
         best = search.RunResult(u, value, 0, au[keep], af[keep])

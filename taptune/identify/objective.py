@@ -133,6 +133,21 @@ def model_shape(window_hz: np.ndarray, receptance: np.ndarray, options: Objectiv
     return _normalise(mag, options.compare)
 
 
+def residual_vector(
+    target: Target, bending_hz: np.ndarray, receptance: np.ndarray, options: ObjectiveOptions
+) -> np.ndarray:
+    """The residuals whose squares sum to J of one recording, shape (len(modes) + K,).
+
+    The relative frequency misses in tolerances, then the shape misfit per window point
+    scaled by 1/(σ_s √K): ``sum(r[:len(modes)]**2)`` is the frequency term, the rest the
+    shape term. What a Gauss–Newton polish works on.
+    """
+    idx = np.asarray(target.modes) - 1
+    rel = (np.asarray(bending_hz)[idx] - target.measured_hz) / (options.sigma_f * target.measured_hz)
+    diff = target.shape - model_shape(target.window_hz, receptance, options)
+    return np.concatenate([rel, diff / (options.sigma_s * np.sqrt(diff.size))])
+
+
 def objective_terms(
     target: Target, bending_hz: np.ndarray, receptance: np.ndarray, options: ObjectiveOptions
 ) -> tuple[float, float]:
@@ -206,6 +221,34 @@ class Objective:
     def known(self, p) -> bool:
         """Whether the terms at p are remembered (asking for them costs no evaluation)."""
         return np.asarray(p, dtype=float).tobytes() in self.memo
+
+    def residuals(self, p) -> np.ndarray:
+        """The residual vector of every recording, concatenated (J = its squared norm);
+        counts one evaluation and remembers the summed terms. A failed model evaluation
+        gives residuals whose squares sum to :attr:`BAD`."""
+        p = np.asarray(p, dtype=float)
+        self.evaluations += 1
+        try:
+            parts = []
+            for target, ev in zip(self.targets, self.evaluators):
+                e = ev.evaluate(p, target.window_hz)
+                parts.append(residual_vector(target, e.bending_hz, e.tip_receptance, self.options))
+            r = np.concatenate(parts)
+            ok = bool(np.all(np.isfinite(r)))
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+            ok = False
+        if not ok:
+            n = sum(len(t.modes) + len(t.window_hz) for t in self.targets)
+            self.memo.setdefault(p.tobytes(), np.array([self.BAD, self.BAD]))
+            return np.full(n, np.sqrt(self.BAD / n))
+        if p.tobytes() not in self.memo:
+            sq = r * r
+            f, start = 0.0, 0
+            for t in self.targets:
+                f += float(np.sum(sq[start:start + len(t.modes)]))
+                start += len(t.modes) + len(t.window_hz)
+            self.memo[p.tobytes()] = np.array([f, float(np.sum(sq)) - f])
+        return r
 
     def __call__(self, p) -> float:
         self.evaluations += 1

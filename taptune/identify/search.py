@@ -4,7 +4,7 @@ Three phases run as tasks on worker processes (or in-process with ``jobs=1``; th
 result is the same, bit for bit):
 
 1. genetic-algorithm islands, each seeded from the master seed;
-2. BOBYQA polishes from each island's best and from diverse good archive points;
+2. least-squares (Gauss–Newton) polishes from each island's best and from diverse good archive points;
 3. the near-optimal set's extent, each parameter pushed low and high inside it
    (:mod:`taptune.identify.uncertainty`).
 
@@ -12,9 +12,10 @@ Two kinds of workers. In a plain process (the CLI) a pool is forked per identifi
 the objective, with its evaluators, is set in :data:`STATE` before the fork, so it is
 built once and shared, never pickled. Forking is unsafe once other threads run (Qt's),
 so an app starts a :class:`WarmPool` once (``spawn``: fresh interpreters) and installs
-it with :func:`set_shared_pool`; each identification then sends its objective pickled
-(≈ 3 MB, 3 ms; rebuilding the evaluator in a worker costs 0.45 s), and each worker
-unpickles it once.
+it with :func:`set_shared_pool`; each identification then writes its objective pickled
+(≈ 3 MB, 3 ms; rebuilding the evaluator in a worker costs 0.45 s) once to a temporary
+file in shared memory (``/dev/shm`` where there is one), every task carries only its
+name, and each worker reads and unpickles it once.
 """
 
 from __future__ import annotations
@@ -22,13 +23,14 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import pickle
+import tempfile
 import threading
 from dataclasses import dataclass
 
 import numpy as np
 
 from taptune.identify.objective import Objective
-from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish
+from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish_least_squares
 from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms
 from taptune.model.params import NAMES, unit_to_p
 
@@ -133,7 +135,7 @@ def ga_task(index: int) -> RunResult:
 
 
 def polish_task(u0: np.ndarray) -> RunResult:
-    """BOBYQA from one start; returns the polished point and its near-optimal trail."""
+    """Least-squares (Gauss–Newton) polish from one start; returns the polished point and its near-optimal trail."""
     objective: Objective = STATE["objective"]
     options = STATE["options"]
     if (stopped := _cancelled(u0)) is not None:
@@ -141,7 +143,8 @@ def polish_task(u0: np.ndarray) -> RunResult:
     archive = Archive()
     start = objective.evaluations
     with _limits():
-        u, value, _ = polish(lambda x: objective(unit_to_p(x)), u0, options.polish_evaluations, archive=archive)
+        u, value, _ = polish_least_squares(lambda x: objective.residuals(unit_to_p(x)), u0, options.polish_evaluations,
+                                           archive=archive)
     au, af = archive.arrays()
     keep = af <= value + near_band(value, options, n_modes(objective))
     return RunResult(u, value, objective.evaluations - start, au[keep], af[keep],
@@ -231,12 +234,22 @@ def _warm_up(_):
 
 
 def _remote(args):
-    """Run one task in a warm worker: unpickle this identification's objective once per worker."""
-    fn, key, blob, item = args
+    """Run one task in a warm worker: read this identification's objective once per worker."""
+    fn, key, path, item = args
     if STATE.get("key") != key:
-        objective, options = pickle.loads(blob)
+        with open(path, "rb") as f:
+            objective, options = pickle.load(f)
         STATE.update(objective=objective, options=options, key=key)
     return fn(item)
+
+
+def _shared_file(blob: bytes) -> str:
+    """Write ``blob`` to a new temporary file, in shared memory where there is some; its path."""
+    folder = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else None
+    fd, path = tempfile.mkstemp(prefix="taptune-objective-", suffix=".pkl", dir=folder)
+    with os.fdopen(fd, "wb") as f:
+        f.write(blob)
+    return path
 
 
 class WarmPool:
@@ -321,7 +334,12 @@ class Workers:
             self.counts = _Slots(self.warm.counts, options.islands)
             self.cancel = self.warm.cancel
             self.key = os.urandom(8).hex()
-            self.blob = pickle.dumps((objective, options), protocol=pickle.HIGHEST_PROTOCOL)
+            self.path = None
+            try:
+                self.path = _shared_file(pickle.dumps((objective, options), protocol=pickle.HIGHEST_PROTOCOL))
+            except BaseException:
+                self.warm.lock.release()
+                raise
             return
         self.counts = self.ctx.Array("i", options.islands, lock=False) if self.ctx else [0] * options.islands
         self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
@@ -348,7 +366,7 @@ class Workers:
                     break
         else:
             if self.warm is not None:
-                pending = self.warm.pool.map_async(_remote, [(fn, self.key, self.blob, i) for i in items], chunksize=1)
+                pending = self.warm.pool.map_async(_remote, [(fn, self.key, self.path, i) for i in items], chunksize=1)
             else:
                 pending = self.pool.map_async(fn, items, chunksize=1)
             while not pending.ready():
@@ -364,6 +382,10 @@ class Workers:
 
     def __exit__(self, *exc):
         if self.warm is not None:
+            try:
+                os.unlink(self.path)
+            except OSError:
+                pass
             self.warm.lock.release()
             return False
         if self.pool is not None:

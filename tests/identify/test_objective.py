@@ -96,3 +96,26 @@ def test_objective_sums_recordings_and_counts_evaluations():
     assert value > 1.0
     assert obj.batch(np.zeros((3, 7))).shape == (3,)
     assert obj.evaluations == 4
+
+
+def test_residuals_square_to_the_objective_and_fill_the_memo():
+    class Shifted:
+        def __init__(self, fn):
+            self.fn = fn
+
+        def evaluate(self, p, window_hz):
+            from types import SimpleNamespace
+
+            fn = self.fn * (1 + p[0])
+            return SimpleNamespace(bending_hz=np.array([fn, 12000, 17000.0]), tip_receptance=resonance(window_hz, fn))
+
+    t = make_target(FREQ, np.abs(resonance(FREQ)), {1: 5000.0, 2: 12000.0, 3: 17000.0})
+    t2 = make_target(FREQ, np.abs(resonance(FREQ)), {1: 5000.0, 3: 17000.0})
+    p = np.array([0.002, 0, 0, 0, 0, 0, 0])
+    fresh = Objective([t, t2], [Shifted(5000.0), Shifted(5010.0)])
+    r = fresh.residuals(p)
+    assert r.shape == (3 + 201 + 2 + 201,)
+    assert fresh.evaluations == 1 and fresh.known(p)
+    expected = Objective([t, t2], [Shifted(5000.0), Shifted(5010.0)])
+    assert float(r @ r) == pytest.approx(expected(p), rel=1e-12)
+    np.testing.assert_allclose(fresh.summed_terms(p), expected.summed_terms(p), rtol=1e-12)

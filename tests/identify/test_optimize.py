@@ -1,9 +1,10 @@
-"""The genetic algorithm and the BOBYQA polish find known optima, deterministically."""
+"""The genetic algorithm and the local polishes (BOBYQA, least squares) find known optima, deterministically."""
 
 import numpy as np
 import pytest
 
-from taptune.identify.optimize import Archive, Cancelled, GAOptions, genetic_algorithm, latin_hypercube, polish
+from taptune.identify.optimize import (Archive, Cancelled, GAOptions, genetic_algorithm, latin_hypercube, polish,
+                                      polish_least_squares)
 
 OPTIMUM = np.array([0.13, 0.87, 0.42, 0.05, 0.61, 0.33, 0.77])
 
@@ -77,3 +78,27 @@ def test_polish_stays_inside_the_unit_cube():
     u, value, _ = polish(lambda x: float(np.sum((x - target) ** 2)), np.full(7, 0.5), 300)
     assert np.all(u <= 1.0) and np.all(u >= 0.0)
     np.testing.assert_allclose(u, 1.0, atol=1e-6)
+
+
+def bowl_residuals(u):
+    """A nonlinear least-squares problem with its zero at OPTIMUM (J = Σ r²)."""
+    d = np.asarray(u) - OPTIMUM
+    return np.concatenate([d, 0.5 * d**2, [np.sum(d) ** 2]])
+
+
+def test_least_squares_polish_reaches_the_minimum_in_few_evaluations():
+    archive = Archive()
+    u, value, n = polish_least_squares(bowl_residuals, np.full(7, 0.5), 120, archive=archive)
+    assert value < 1e-8
+    np.testing.assert_allclose(u, OPTIMUM, atol=1e-4)
+    au, af = archive.arrays()
+    assert n == len(af) <= 120
+    assert value == af.min()
+
+
+def test_least_squares_polish_keeps_to_its_budget_and_the_cube():
+    target = np.full(7, 1.3)  # outside the box: the polish nears the bound from inside
+    u, value, n = polish_least_squares(lambda x: np.asarray(x) - target, np.full(7, 0.5), 30)
+    assert n <= 30
+    assert np.all(u <= 1.0) and np.all(u >= 0.0)
+    np.testing.assert_allclose(u, 1.0, atol=1e-2)

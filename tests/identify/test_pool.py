@@ -1,5 +1,8 @@
 """A warm spawn pool (the app's workers) gives the result of one process, and can cancel."""
 
+import glob
+import os
+import tempfile
 import threading
 
 import pytest
@@ -53,6 +56,9 @@ def test_the_warm_pool_gives_the_single_process_result_from_a_thread(problem, wa
     assert len(results) == 2
     for r in results:
         _same(alone, r)
+    # The objective went to the workers through one temporary file, removed afterwards.
+    assert not glob.glob(os.path.join("/dev/shm", "taptune-objective-*")) + glob.glob(
+        os.path.join(tempfile.gettempdir(), "taptune-objective-*"))
 
 
 @pytest.mark.slow
