@@ -303,11 +303,20 @@ def _bandwidth_warnings(name, expected_hz, bandwidth_hz, low_pass, recording) ->
     return out
 
 
+#: Marks the faint-peak warning (:func:`faint_warning`), so a relabelling can replace it.
+FAINT_MARK = "taken from faint peak"
+
+
 def faint_warning(name: str, peaks: list[Peak]) -> str:
-    """The warning naming the bending modes taken from faint peaks."""
-    what = ", ".join(f"mode {q.mode} at {q.hz:.0f} Hz ({q.snr_db:.0f} dB over the local floor)" for q in peaks)
-    return (f"{name}: faint peak{'s' if len(peaks) > 1 else ''} taken as bending: {what}; found only by the "
-            f"model-guided search (in every tap, resonance-shaped): tap harder or nearer the microphone to confirm")
+    """The warning naming the bending modes taken from faint peaks ('' without any)."""
+    if not peaks:
+        return ""
+    plural = "s" if len(peaks) > 1 else ""
+    what = "; ".join(f"mode {q.mode} at {q.hz:.0f} Hz, {q.snr_db:.0f} dB over the local floor"
+                     for q in sorted(peaks, key=lambda q: q.mode or 0))
+    return (f"{name}: bending mode{plural} {FAINT_MARK}{plural} ({what}): found only by the model-guided "
+            f"search (there in every tap, resonance-shaped), so less sure; tap harder or nearer the "
+            f"microphone to confirm")
 
 
 def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz, bands,
@@ -408,15 +417,15 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
                 growth = interface_growth(peaks, ri["peaks"], stationary=stationary)
             labeled, lw = label(peaks, growth)
     warnings.extend(lw)
-    taken = [q for q in labeled if q.kind == "bending" and q.reliability == "faint"]
-    if taken:
-        warnings.append(faint_warning(name, taken))
     # Labels need percent accuracy, identification needs 0.01 %: the full refinement is
     # spent on the bending peaks (and the faint ones, which may become bending when the
     # model decides the labels); stationary peaks keep their parabolic frequency.
     effort = [2 if q.kind == "bending" or q.reliability == "faint" else (0 if stat else 1)
               for q, stat in zip(labeled, stationary)]
     labeled = sorted(r["refine"](labeled, effort, bins, over), key=lambda q: q.hz)
+    taken = [q for q in labeled if q.kind == "bending" and q.reliability == "faint"]
+    if taken:
+        warnings.append(faint_warning(name, taken))
     return SpectrumAnalysis(
         file=recording.path, sample_rate=recording.sample_rate, channels=recording.channels,
         duration_s=recording.duration_s, freq_hz=r["freq"], magnitude=r["mag"],

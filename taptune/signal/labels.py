@@ -213,11 +213,15 @@ class Labeling:
     prior : float
         The part that comes from the model guidance (how well the nominal explanation
         accounts for the chosen frequencies): a fit of the labeling replaces it.
+    unexplained : int
+        Loud peaks (:func:`loud_peaks`) it leaves out although a mode whose range holds
+        them is missing or took a peak more than ``louder_db`` quieter.
     """
 
     modes: tuple
     cost: float
     prior: float
+    unexplained: int = 0
 
     @property
     def label_cost(self) -> float:
@@ -391,14 +395,17 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
         # A loud peak left unexplained inside the bounds of a mode (between its assigned
         # neighbours) that is missing or took a quieter peak costs: a tip tap rings
         # the bending modes loudest, so it is most likely that mode.
+        left_out = set()
         for m, i in enumerate(combo):
             lo = max([hz[j] for mm, j in chosen if mm < m] + [bnd[m, 0]])
             hi = min([hz[j] for mm, j in chosen if mm > m] + [bnd[m, 1]])
             ceiling = -np.inf if i is None else peaks[i].level_db + options.louder_db
-            if any(loud[k] and k not in combo and lo < hz[k] < hi and peaks[k].level_db > ceiling
-                   for k in range(len(peaks))):
+            here = {k for k in range(len(peaks))
+                    if loud[k] and k not in combo and lo < hz[k] < hi and peaks[k].level_db > ceiling}
+            if here:
                 cost += options.unexplained_cost
-        found.append(Labeling(tuple(combo), float(cost), float(prior)))
+            left_out |= here
+        found.append(Labeling(tuple(combo), float(cost), float(prior), len(left_out)))
     found.sort(key=lambda lab: lab.cost)
     out = found[:max(keep, 1)]
     for k in must_try:

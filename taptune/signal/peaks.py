@@ -816,6 +816,12 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
             keep.append({"idx": int(i), "hz": float(f[i] + d * df), "db": float(lev), "over_db": float(over),
                          "prominence_db": float(prom), "f_ratio": ratio})
         keep.sort(key=lambda c: -c["over_db"])
-        for c in keep[:per_window]:
+        # Noise splits the top of a faint resonance into several maxima: the highest stands
+        # for the others within its (smallest plausible) half-power width on either side.
+        chosen = []
+        for c in keep:
+            if all(abs(c["hz"] - q["hz"]) > 2 * min_width_rel * q["hz"] for q in chosen):
+                chosen.append(c)
+        for c in chosen[:per_window]:
             found[c["idx"]] = c
     return [found[i] for i in sorted(found)]
