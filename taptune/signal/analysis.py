@@ -63,8 +63,10 @@ class SpectrumOptions:
     #: robust local floor (8 dB: the 99.97 % point of an average of 3 Rayleigh-noise
     #: taps) ...
     faint_min_db: float = 8.0
-    #: ... standing this far over its own floor in every tap ...
+    #: ... standing this far, and this fraction of the average's height, over its own
+    #: floor in every tap (a mode rings in every tap alike; taps differ by ~3 dB) ...
     faint_tap_db: float = 3.0
+    faint_tap_fraction: float = 0.5
     #: ... and resonance-shaped: F ratio of a one-mode fit over a flat floor.
     faint_f_ratio: float = 8.0
     #: Flank width of the local floor [Hz].
@@ -335,6 +337,7 @@ def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz
     search = [(lo, min(hi, fmax)) for lo, hi in search if lo < fmax]
     cands = pick_faint_peaks(freq, r["mag"], r["tap_mag"], search, noise_mag=r["noise_mag"],
                              min_db=o.faint_min_db, tap_db=o.faint_tap_db, f_ratio=o.faint_f_ratio,
+                             prominence_db=o.prominence_db, tap_fraction=o.faint_tap_fraction,
                              ring_hz=o.faint_ring_hz, stationary_margin_db=o.stationary_margin_db,
                              oversample=r["oversample"])
     scatter = tap_scatter(freq, r["tap_mag"], [c["idx"] for c in cands])

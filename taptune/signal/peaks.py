@@ -739,18 +739,20 @@ def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0
 
 
 def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: float = 8.0,
-                     tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 3.0,
+                     tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 6.0,
                      ring_hz: float = 250.0, stationary_margin_db: float = 6.0,
-                     oversample: float = 1.0, per_window: int = 2, min_width_rel: float = 1e-3):
+                     oversample: float = 1.0, per_window: int = 2, min_width_rel: float = 1e-3,
+                     tap_fraction: float = 0.5):
     """Faint resonances inside search windows: the guided search for missing modes.
 
     :func:`pick_peaks` demands 15 dB over the noise so that nothing it returns is noise,
     anywhere in the spectrum. Where the model says a bending mode must be, a lower bar
     is safe if the peak passes three independent tests: it stands ``min_db`` over the
     robust local floor (:func:`_flank_floor_db`, flanks from 4 half-power widths out to
-    ``ring_hz``), it is there in *every* tap (each tap ``tap_db`` over its own floor
-    within a half-width of the averaged peak: a noise bump of one tap's spectrum is
-    not where the others have theirs), and it is shaped like a resonance
+    ``ring_hz``), it is there in *every* tap (each tap stands over its own floor, within
+    one native bin of the averaged peak, by ``tap_db`` and by ``tap_fraction`` of the
+    average's height in dB: a mode rings in every tap alike, while a bump of one tap's
+    noise or a click is not where the others have theirs), and it is shaped like a resonance
     (:func:`resonance_test` ≥ ``f_ratio``). Peaks less than ``stationary_margin_db``
     over the between-tap spectrum ``noise_mag`` are hum, not modes.
 
@@ -775,7 +777,8 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
     -------
     list of dict
         ``idx`` (bin), ``hz`` (parabolic) [Hz], ``db`` (level [dB re the unit of
-        ``mag``]), ``over_db`` (over the floor), ``prominence_db``, ``f_ratio``, ascending.
+        ``mag``]), ``over_db`` (over the floor), ``prominence_db``, ``f_ratio`` and
+        ``width_hz`` (the half-power half-width taken), ascending.
     """
     f = np.asarray(freq_hz)
     m = np.asarray(mag, dtype=np.float64)
@@ -806,7 +809,7 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
             reach = max(int(round(oversample)), 2)
             taps_over = [float(np.max(tdb[k, max(i - reach, 0):i + reach + 1]))
                          - _flank_floor_db(tdb[k], int(i), inner, inner + ring) for k in range(t.shape[0])]
-            if min(taps_over) < tap_db:
+            if min(taps_over) < max(tap_db, tap_fraction * over):
                 continue
             ratio = resonance_test(f, m, int(i), half_hz=max(4 * hw, 8 * df * oversample),
                                    oversample=oversample)
@@ -814,13 +817,13 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
                 continue
             d, lev = parabolic_peak(db, int(i))
             keep.append({"idx": int(i), "hz": float(f[i] + d * df), "db": float(lev), "over_db": float(over),
-                         "prominence_db": float(prom), "f_ratio": ratio})
+                         "prominence_db": float(prom), "f_ratio": ratio, "width_hz": float(hw)})
         keep.sort(key=lambda c: -c["over_db"])
         # Noise splits the top of a faint resonance into several maxima: the highest stands
-        # for the others within its (smallest plausible) half-power width on either side.
+        # for the others within two of its half-power widths on either side.
         chosen = []
         for c in keep:
-            if all(abs(c["hz"] - q["hz"]) > 2 * min_width_rel * q["hz"] for q in chosen):
+            if all(abs(c["hz"] - q["hz"]) > 2 * q["width_hz"] for q in chosen):
                 chosen.append(c)
         for c in chosen[:per_window]:
             found[c["idx"]] = c
