@@ -345,8 +345,9 @@ def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz
     for c, sc in zip(cands, scatter):
         i = c["idx"]
         over_noise = float(20 * np.log10(r["mag"][i] / max(float(r["floor"][i]), 1e-300)))
-        pk = Peak(hz=c["hz"], level_db=c["db"] - r["top_db"], kind="other", scatter_hz=float(sc),
-                  prominence_db=c["prominence_db"], snr_db=c["over_db"], note="faint", reliability="faint")
+        pk = Peak(hz=c["hz"], level_db=c["db"] - r["top_db"], kind="other", damping_ratio=c["zeta"],
+                  scatter_hz=float(sc), prominence_db=c["prominence_db"], snr_db=c["over_db"], note="faint",
+                  reliability="faint")
         out.append((pk, False, i, over_noise))
     return out
 
@@ -421,11 +422,12 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
             labeled, lw = label(peaks, growth)
     warnings.extend(lw)
     # Labels need percent accuracy, identification needs 0.01 %: the full refinement is
-    # spent on the bending peaks (and the faint ones, which may become bending when the
-    # model decides the labels); stationary peaks keep their parabolic frequency.
-    effort = [2 if q.kind == "bending" or q.reliability == "faint" else (0 if stat else 1)
+    # spent on the bending peaks only; stationary peaks keep their parabolic frequency,
+    # faint ones that of their one-mode fit (a pole fit can lock onto a noise spike).
+    effort = [0 if stat or q.reliability == "faint" else (2 if q.kind == "bending" else 1)
               for q, stat in zip(labeled, stationary)]
-    labeled = sorted(r["refine"](labeled, effort, bins, over), key=lambda q: q.hz)
+    refined = r["refine"](labeled, effort, bins, over)
+    labeled = sorted((q if q.reliability == "faint" else rq for q, rq in zip(labeled, refined)), key=lambda q: q.hz)
     taken = [q for q in labeled if q.kind == "bending" and q.reliability == "faint"]
     if taken:
         warnings.append(faint_warning(name, taken))

@@ -692,22 +692,28 @@ def _flank_floor_db(db, i: int, inner: int, outer: int) -> float:
     return float(np.mean(meds)) if meds else -np.inf
 
 
-def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
-                   min_half_width_hz: float = 0.5) -> float:
-    """F ratio of a resonance-shaped peak over a flat (sloping) local floor at bin ``i``.
+def fit_resonance(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
+                  min_half_width_hz: float = 0.5, reach_hz: float | None = None) -> tuple[float, float, float]:
+    """One-mode fit of the averaged magnitude around bin ``i`` against a flat (sloping) floor.
 
-    Over ``±half_hz`` the averaged magnitude is fitted twice, linear in the amplitudes:
-    a straight background alone, and the background plus a single-degree-of-freedom
-    magnitude peak ``c / sqrt(1 + ((f − f0)/γ)²)`` (f0 within a bin of ``i``, γ on a
-    geometric grid from ``min_half_width_hz`` to ``half_hz``, c > 0). The ratio is
+    Over ``±half_hz`` the magnitude is fitted twice, linear in the amplitudes: a
+    straight background alone, and the background plus a single-degree-of-freedom
+    magnitude peak ``c / sqrt(1 + ((f − f0)/γ)²)`` (c > 0; f0 within ``reach_hz`` of bin
+    ``i``, default one bin; γ from ``min_half_width_hz`` to ``half_hz``), by a grid
+    search refined once around its best point. The F ratio is
     ``((RSS_floor − RSS_peak)/3) / (RSS_peak/(n_eff − 5))`` with ``n_eff`` the bins over
     the zero-padding factor ``oversample`` (neighbouring bins of a zero-padded spectrum
-    are not independent). A ringing mode gives tens to thousands; noise about 1.
+    are not independent): a ringing mode gives tens to thousands, noise about 1.
 
     Returns
     -------
-    float
-        The F ratio (0 when the window is too short or no positive peak fits).
+    f_ratio : float
+        0 when the window is too short or no positive peak fits.
+    f0_hz : float
+        The fitted peak frequency [Hz] (the bin's when no peak fits): the whole peak's
+        shape places it, steadier than the noisy top of a faint peak.
+    half_width_hz : float
+        The fitted half-power half-width γ [Hz] (≈ ζ·f0).
     """
     f = np.asarray(freq_hz)
     m = np.asarray(mag, dtype=np.float64)
@@ -717,25 +723,39 @@ def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0
     x, y = f[a:b] - f[i], m[a:b]
     n_eff = x.size / max(oversample, 1.0)
     if n_eff < 8:
-        return 0.0
-    scale = float(np.max(np.abs(y))) or 1.0
-    y = y / scale
+        return 0.0, float(f[i]), float("nan")
+    y = y / (float(np.max(np.abs(y))) or 1.0)
     base = np.column_stack([np.ones_like(x), x / max(half_hz, df)])
     c0, *_ = np.linalg.lstsq(base, y, rcond=None)
     rss0 = float(np.sum((y - base @ c0) ** 2))
-    best = rss0
-    widths = np.geomspace(max(min_half_width_hz, 0.5 * df), max(half_hz, 2 * df), 16)
-    for f0 in np.linspace(-df, df, 9):
-        for g in widths:
-            shape = 1.0 / np.sqrt(1.0 + ((x - f0) / g) ** 2)
-            a3 = np.column_stack([base, shape])
-            c, *_ = np.linalg.lstsq(a3, y, rcond=None)
-            if c[2] <= 0:
-                continue
-            best = min(best, float(np.sum((y - a3 @ c) ** 2)))
-    if best >= rss0:
-        return 0.0
-    return float(((rss0 - best) / 3.0) / (max(best, 1e-300) / max(n_eff - 5.0, 1.0)))
+    best = [rss0, 0.0, float("nan")]
+
+    def scan(centres, widths):
+        for f0 in centres:
+            for g in widths:
+                a3 = np.column_stack([base, 1.0 / np.sqrt(1.0 + ((x - f0) / g) ** 2)])
+                c, *_ = np.linalg.lstsq(a3, y, rcond=None)
+                if c[2] <= 0:
+                    continue
+                rss = float(np.sum((y - a3 @ c) ** 2))
+                if rss < best[0]:
+                    best[:] = [rss, float(f0), float(g)]
+
+    reach = df if reach_hz is None else max(reach_hz, df)
+    scan(np.linspace(-reach, reach, 17), np.geomspace(max(min_half_width_hz, 0.5 * df), max(half_hz, 2 * df), 16))
+    if best[0] >= rss0:
+        return 0.0, float(f[i]), float("nan")
+    step = reach / 8
+    scan(np.linspace(best[1] - step, best[1] + step, 17), best[2] * np.geomspace(0.7, 1.4, 9))
+    ratio = ((rss0 - best[0]) / 3.0) / (max(best[0], 1e-300) / max(n_eff - 5.0, 1.0))
+    return float(ratio), float(f[i] + best[1]), best[2]
+
+
+def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
+                   min_half_width_hz: float = 0.5) -> float:
+    """F ratio of a resonance-shaped peak over a flat (sloping) local floor at bin ``i``
+    (:func:`fit_resonance`; tens to thousands for a ringing mode, about 1 for noise)."""
+    return fit_resonance(freq_hz, mag, i, half_hz, oversample, min_half_width_hz)[0]
 
 
 def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: float = 8.0,
@@ -776,9 +796,11 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
     Returns
     -------
     list of dict
-        ``idx`` (bin), ``hz`` (parabolic) [Hz], ``db`` (level [dB re the unit of
-        ``mag``]), ``over_db`` (over the floor), ``prominence_db``, ``f_ratio`` and
-        ``width_hz`` (the half-power half-width taken), ascending.
+        ``idx`` (bin), ``hz`` and ``zeta`` (of the one-mode fit, :func:`fit_resonance`:
+        on a faint peak steadier than a pole fit, which can lock onto a noise spike)
+        [Hz, –], ``db`` (level [dB re the unit of ``mag``]), ``over_db`` (over the
+        floor), ``prominence_db``, ``f_ratio`` and ``width_hz`` (the half-power
+        half-width taken), ascending.
     """
     f = np.asarray(freq_hz)
     m = np.asarray(mag, dtype=np.float64)
@@ -811,12 +833,12 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
                          - _flank_floor_db(tdb[k], int(i), inner, inner + ring) for k in range(t.shape[0])]
             if min(taps_over) < max(tap_db, tap_fraction * over):
                 continue
-            ratio = resonance_test(f, m, int(i), half_hz=max(4 * hw, 8 * df * oversample),
-                                   oversample=oversample)
+            ratio, f0, gamma = fit_resonance(f, m, int(i), half_hz=max(4 * hw, 8 * df * oversample),
+                                             oversample=oversample, reach_hz=hw)
             if ratio < f_ratio:
                 continue
-            d, lev = parabolic_peak(db, int(i))
-            keep.append({"idx": int(i), "hz": float(f[i] + d * df), "db": float(lev), "over_db": float(over),
+            _, lev = parabolic_peak(db, int(i))
+            keep.append({"idx": int(i), "hz": f0, "zeta": gamma / f0, "db": float(lev), "over_db": float(over),
                          "prominence_db": float(prom), "f_ratio": ratio, "width_hz": float(hw)})
         keep.sort(key=lambda c: -c["over_db"])
         # Noise splits the top of a faint resonance into several maxima: the highest stands
