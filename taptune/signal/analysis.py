@@ -16,8 +16,9 @@ import numpy as np
 from taptune.errors import InputError
 from taptune.io.audio import Recording
 from taptune.signal.bandwidth import effective_bandwidth, hidden_modes
-from taptune.signal.labels import LabelOptions, interface_bands, interface_growth, label_peaks
-from taptune.signal.peaks import FIT_STARTS_S, Peak, pick_peaks, refine_peaks, tap_scatter
+from taptune.signal.labels import (LabelOptions, faint_windows, guided_windows, interface_bands,
+                                   interface_growth, label_peaks)
+from taptune.signal.peaks import FIT_STARTS_S, Peak, pick_faint_peaks, pick_peaks, refine_peaks, tap_scatter
 from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
                                      tap_segments)
 from taptune.signal.taps import Tap, find_taps, to_mono
@@ -57,6 +58,20 @@ class SpectrumOptions:
     grow_threshold_db: float = 10.0
     low_snr_db: float = 20.0
     band_table: str | None = None
+    #: Guided search for faint bending modes the picking missed (model guidance only,
+    #: :func:`~taptune.signal.peaks.pick_faint_peaks`): a local maximum this far over the
+    #: robust local floor (8 dB: the 99.97 % point of an average of 3 Rayleigh-noise
+    #: taps) ...
+    faint_min_db: float = 8.0
+    #: ... standing this far, and this fraction of the average's height, over its own
+    #: floor in every tap (a mode rings in every tap alike; taps differ by ~3 dB) ...
+    faint_tap_db: float = 3.0
+    faint_tap_fraction: float = 0.5
+    #: ... and resonance-shaped: F ratio of a one-mode fit over a flat floor.
+    faint_f_ratio: float = 8.0
+    #: Flank width of the local floor [Hz].
+    faint_ring_hz: float = 250.0
+    faint_search: bool = True
     labels: LabelOptions = field(default_factory=LabelOptions)
 
 
@@ -230,9 +245,12 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
              for k in range(len(idx))]
     fit_spectra = _fit_spectra_factory(mono, fs, used, seg_n)
 
-    def refine(peaks_in: list[Peak], effort) -> list[Peak]:
-        hz_r, zeta, _ = refine_peaks(freq, mag, fit_spectra, fs, idx, [q.hz for q in peaks_in],
-                                     seg_s=seg_n / fs, effort=effort, snr_db=over,
+    def refine(peaks_in: list[Peak], effort, bins=None, snr=None) -> list[Peak]:
+        """Pole-fit refinement; ``bins``/``snr`` give the bins and heights over the floor
+        of a peak list other than the picked one (e.g. with faint peaks added)."""
+        hz_r, zeta, _ = refine_peaks(freq, mag, fit_spectra, fs, idx if bins is None else np.asarray(bins),
+                                     [q.hz for q in peaks_in],
+                                     seg_s=seg_n / fs, effort=effort, snr_db=over if snr is None else np.asarray(snr),
                                      starts_s=o.fit_starts_s,
                                      target_rel_std=o.target_rel_std,
                                      width_factor=o.fit_width_factor)
@@ -240,8 +258,10 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
                         damping_ratio=None if np.isnan(zeta[k]) else float(zeta[k]))
                 for k, q in enumerate(peaks_in)]
 
+    n_disp = seg_n + int(round(o.pre_onset_s * fs))
     return {"taps": taps, "used": used, "freq": freq, "tap_mag": tap_mag, "mag": mag,
-            "noise_mag": noise_mag, "peaks": peaks, "idx": idx,
+            "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
+            "top_db": top, "oversample": 2 * (freq.size - 1) / n_disp,
             "stationary": [bool(v) for v in stationary], "refine": refine}
 
 
@@ -282,6 +302,53 @@ def _bandwidth_warnings(name, expected_hz, bandwidth_hz, low_pass, recording) ->
         out.append(f"{name}: the recording carries nothing above {cut}; bending mode {mode} expected near "
                    f"{f / 1000:.1f} kHz {what} — record WAV at ≥ 44.1 kHz, or use a recorder app "
                    f"without compression")
+    return out
+
+
+#: Marks the faint-peak warning (:func:`faint_warning`), so a relabelling can replace it.
+FAINT_MARK = "taken from faint peak"
+
+
+def faint_warning(name: str, peaks: list[Peak]) -> str:
+    """The warning naming the bending modes taken from faint peaks ('' without any)."""
+    if not peaks:
+        return ""
+    plural = "s" if len(peaks) > 1 else ""
+    what = "; ".join(f"mode {q.mode} at {q.hz:.0f} Hz, {q.snr_db:.0f} dB over the local floor"
+                     for q in sorted(peaks, key=lambda q: q.mode or 0))
+    return (f"{name}: bending mode{plural} {FAINT_MARK}{plural} ({what}): found only by the model-guided "
+            f"search (there in every tap, resonance-shaped), so less sure; tap harder or nearer the "
+            f"microphone to confirm")
+
+
+def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz, bands,
+                 o: SpectrumOptions) -> list[tuple]:
+    """Faint peaks in the guided windows of the missing bending modes.
+
+    Returns (Peak, stationary, bin, height over the noise floor [dB]) per peak found.
+    """
+    found = {q.mode: q.hz for q in labeled if q.kind == "bending"}
+    windows = guided_windows(expected_hz, bounds_hz, spread_hz, found, options=o.labels)
+    if not windows:
+        return []
+    search = faint_windows(windows.values(), bands, labeled)
+    freq = r["freq"]
+    fmax = min(o.fmax_hz or np.inf, 0.98 * freq[-1])
+    search = [(lo, min(hi, fmax)) for lo, hi in search if lo < fmax]
+    cands = pick_faint_peaks(freq, r["mag"], r["tap_mag"], search, noise_mag=r["noise_mag"],
+                             min_db=o.faint_min_db, tap_db=o.faint_tap_db, f_ratio=o.faint_f_ratio,
+                             prominence_db=o.prominence_db, tap_fraction=o.faint_tap_fraction,
+                             ring_hz=o.faint_ring_hz, stationary_margin_db=o.stationary_margin_db,
+                             oversample=r["oversample"])
+    scatter = tap_scatter(freq, r["tap_mag"], [c["idx"] for c in cands])
+    out = []
+    for c, sc in zip(cands, scatter):
+        i = c["idx"]
+        over_noise = float(20 * np.log10(r["mag"][i] / max(float(r["floor"][i]), 1e-300)))
+        pk = Peak(hz=c["hz"], level_db=c["db"] - r["top_db"], kind="other", damping_ratio=c["zeta"],
+                  scatter_hz=float(sc), prominence_db=c["prominence_db"], snr_db=c["over_db"], note="faint",
+                  reliability="faint")
+        out.append((pk, False, i, over_noise))
     return out
 
 
@@ -333,16 +400,37 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     bandwidth, low_pass = effective_bandwidth(r["freq"], r["mag"], recording.sample_rate)
     if expected_hz is not None:
         warnings.extend(_bandwidth_warnings(name, expected_hz, bandwidth, low_pass, recording))
-    labeled, lw = label_peaks(peaks, bands=bands, expected_hz=expected_hz, bounds_hz=bounds_hz,
-                              spread_hz=spread_hz,
-                              stationary=r["stationary"], growth_db=growth,
-                              grow_threshold_db=o.grow_threshold_db, options=o.labels)
+    stationary, bins, over = list(r["stationary"]), list(r["idx"]), list(r["over"])
+
+    def label(pk, grow):
+        return label_peaks(pk, bands=bands, expected_hz=expected_hz, bounds_hz=bounds_hz, spread_hz=spread_hz,
+                           stationary=stationary, growth_db=grow, grow_threshold_db=o.grow_threshold_db,
+                           options=o.labels)
+
+    labeled, lw = label(peaks, growth)
+    if expected_hz is not None and o.faint_search:
+        faint = _faint_peaks(r, labeled, expected_hz, bounds_hz, spread_hz,
+                             bands if growth is None else (), o)
+        if faint:
+            # The faint peaks join the candidates and the labels are decided again.
+            merged = sorted([(q, s, b, v) for q, s, b, v in zip(peaks, stationary, bins, over)] + faint,
+                            key=lambda t: t[0].hz)
+            peaks = [t[0] for t in merged]
+            stationary, bins, over = [t[1] for t in merged], [t[2] for t in merged], [t[3] for t in merged]
+            if interface_tap is not None:
+                growth = interface_growth(peaks, ri["peaks"], stationary=stationary)
+            labeled, lw = label(peaks, growth)
     warnings.extend(lw)
     # Labels need percent accuracy, identification needs 0.01 %: the full refinement is
-    # spent on the bending peaks only; stationary peaks keep their parabolic frequency.
-    effort = [2 if q.kind == "bending" else (0 if stat else 1)
-              for q, stat in zip(labeled, r["stationary"])]
-    labeled = sorted(r["refine"](labeled, effort), key=lambda q: q.hz)
+    # spent on the bending peaks only; stationary peaks keep their parabolic frequency,
+    # faint ones that of their one-mode fit (a pole fit can lock onto a noise spike).
+    effort = [0 if stat or q.reliability == "faint" else (2 if q.kind == "bending" else 1)
+              for q, stat in zip(labeled, stationary)]
+    refined = r["refine"](labeled, effort, bins, over)
+    labeled = sorted((q if q.reliability == "faint" else rq for q, rq in zip(labeled, refined)), key=lambda q: q.hz)
+    taken = [q for q in labeled if q.kind == "bending" and q.reliability == "faint"]
+    if taken:
+        warnings.append(faint_warning(name, taken))
     return SpectrumAnalysis(
         file=recording.path, sample_rate=recording.sample_rate, channels=recording.channels,
         duration_s=recording.duration_s, freq_hz=r["freq"], magnitude=r["mag"],

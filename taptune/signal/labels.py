@@ -160,6 +160,12 @@ class LabelOptions:
         missing, or took a peak more than ``louder_db`` quieter (MODEL.md §8.3: a band
         or a distant guess must not silently drop it).
     louder_db : float
+    faint_cost : float
+        Extra cost of taking a faint peak (``Peak.reliability == "faint"``) as a bending
+        mode: a clear peak that the explanation accounts for as well wins.
+    faint_window_sigmas : float
+        Half-width of the guided search window of a missing mode (:func:`guided_windows`)
+        in standard deviations of its predicted log-frequency.
     """
 
     # Defaults chosen on synthetic recordings of random holders (the model's tip
@@ -177,6 +183,8 @@ class LabelOptions:
     loud_level_db: float = -12.0
     unexplained_cost: float = 2.0
     louder_db: float = 6.0
+    faint_cost: float = 1.0
+    faint_window_sigmas: float = 3.0
 
 
 def _explain_cost(r, basis, sigma_mode: float) -> float:
@@ -205,11 +213,15 @@ class Labeling:
     prior : float
         The part that comes from the model guidance (how well the nominal explanation
         accounts for the chosen frequencies): a fit of the labeling replaces it.
+    unexplained : int
+        Loud peaks (:func:`loud_peaks`) it leaves out although a mode whose range holds
+        them is missing or took a peak more than ``louder_db`` quieter.
     """
 
     modes: tuple
     cost: float
     prior: float
+    unexplained: int = 0
 
     @property
     def label_cost(self) -> float:
@@ -221,6 +233,121 @@ def loud_peaks(peaks: list[Peak], ok, bands, options: LabelOptions) -> list[bool
     """Peaks too loud to leave unexplained: clear, outside the interface bands, candidates."""
     return [bool(ok[i]) and not in_bands(p.hz, bands) and p.prominence_db >= options.loud_prominence_db
             and p.level_db >= options.loud_level_db for i, p in enumerate(peaks)]
+
+
+def _guidance(e, bounds_hz, spread_hz, options: LabelOptions):
+    """(bounds (n, 2), log-frequency basis (n, k) per unit parameter shift, σ of a mode)."""
+    n = e.size
+    if bounds_hz is None:
+        bnd = np.column_stack([e / 1.3, e * 1.3])
+        rigid = e * 1.05
+    else:
+        bnd = np.asarray(bounds_hz, dtype=np.float64).reshape(n, 2)
+        # The upper bound is the rigid contact with the stiffest, lightest holder
+        # material of the search space (MODEL.md §7.6): take the material factor out.
+        rigid = bnd[:, 1] / UPPER_BOUND_MATERIAL
+    # Each mode's sensitivity to the contact: log-distance from nominal to rigid contact
+    # (the tool's modes move a lot with the contact, a holder mode hardly).
+    w = np.maximum(np.log(np.maximum(rigid, e) / e), 0.005)
+    if spread_hz is not None:
+        basis = np.log1p(np.asarray(spread_hz, dtype=np.float64).reshape(n, -1) / e[:, None])
+        return bnd, basis, options.sigma_mode_spread
+    basis = np.column_stack([np.full(n, options.sigma_common), options.sigma_contact * w])
+    return bnd, basis, options.sigma_mode
+
+
+def guided_windows(expected_hz, bounds_hz=None, spread_hz=None, found=None, *,
+                   options: LabelOptions = LabelOptions()) -> dict[int, tuple[float, float]]:
+    """Where each missing bending mode can plausibly be, given the modes already found.
+
+    The found modes' log-frequency shifts from the expectation are explained by unit-
+    variance parameter shifts (as in :func:`ranked_labelings`: the model's spreads, or a
+    common and a contact shift); the explanation predicts each missing mode's shift and
+    its variance. The window is that prediction ± ``options.faint_window_sigmas``
+    standard deviations (the prediction's and the model's ``σ`` of a mode combined),
+    inside the physical bounds and strictly between the neighbouring found modes.
+
+    Parameters
+    ----------
+    expected_hz, bounds_hz, spread_hz : array_like
+        Model guidance, shapes (n,), (n, 2), (n, k) [Hz] (see :func:`assign_bending`).
+    found : dict, optional
+        {mode (1-based): frequency [Hz]} of the modes already labelled.
+
+    Returns
+    -------
+    dict
+        {mode: (lo_hz, hi_hz)} for each missing mode with a non-empty window.
+    """
+    e = np.asarray(expected_hz, dtype=np.float64)
+    n = e.size
+    found = dict(found or {})
+    bnd, basis, sigma = _guidance(e, bounds_hz, spread_hz, options)
+    known = sorted(m - 1 for m in found if 1 <= m <= n)
+    a = basis[known] / sigma if known else np.zeros((0, basis.shape[1]))
+    cov = np.linalg.inv(a.T @ a + np.eye(basis.shape[1]))
+    coef = cov @ (a.T @ (np.log([found[m + 1] / e[m] for m in known]) / sigma)) if known else np.zeros(basis.shape[1])
+    out = {}
+    for m in range(n):
+        if m + 1 in found:
+            continue
+        shift = float(basis[m] @ coef)
+        sd = float(np.sqrt(basis[m] @ cov @ basis[m] + sigma**2))
+        half = options.faint_window_sigmas * sd
+        lo, hi = e[m] * np.exp(shift - half), e[m] * np.exp(shift + half)
+        lo, hi = max(lo, bnd[m, 0]), min(hi, bnd[m, 1])
+        below = [found[j + 1] for j in known if j < m]
+        above = [found[j + 1] for j in known if j > m]
+        if below:
+            lo = max(lo, 1.01 * max(below))
+        if above:
+            hi = min(hi, min(above) / 1.01)
+        if hi > lo:
+            out[m + 1] = (float(lo), float(hi))
+    return out
+
+
+def faint_windows(windows, bands=(), peaks=(), guard_rel: float = 3e-3, guard_hz: float = 20.0):
+    """The search windows without the interface bands and the surroundings of known peaks.
+
+    Parameters
+    ----------
+    windows : iterable of (lo_hz, hi_hz)
+    bands : sequence of (lo, hi)
+        Interface bands [Hz]: the loud local modes and their skirts are not searched.
+    peaks : sequence of Peak
+        Peaks already picked: ± max(``guard_rel`` × f, ``guard_hz``) around each is left
+        out (the guided search looks for what the picking missed, not for its skirts).
+
+    Returns
+    -------
+    list of (lo_hz, hi_hz)
+        Disjoint, ascending.
+    """
+    cuts = [(lo, hi) for lo, hi in bands]
+    cuts += [(p.hz - max(guard_rel * p.hz, guard_hz), p.hz + max(guard_rel * p.hz, guard_hz)) for p in peaks]
+    out = []
+    for lo, hi in sorted(windows):
+        parts = [(float(lo), float(hi))]
+        for c0, c1 in cuts:
+            nxt = []
+            for a, b in parts:
+                if c1 <= a or c0 >= b:
+                    nxt.append((a, b))
+                    continue
+                if c0 > a:
+                    nxt.append((a, c0))
+                if c1 < b:
+                    nxt.append((c1, b))
+            parts = nxt
+        out.extend(parts)
+    merged = []
+    for a, b in sorted(out):
+        if merged and a <= merged[-1][1]:
+            merged[-1] = (merged[-1][0], max(b, merged[-1][1]))
+        else:
+            merged.append((a, b))
+    return merged
 
 
 def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
@@ -236,23 +363,7 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
     """
     e = np.asarray(expected_hz, dtype=np.float64)
     n = e.size
-    if bounds_hz is None:
-        bnd = np.column_stack([e / 1.3, e * 1.3])
-        rigid = e * 1.05
-    else:
-        bnd = np.asarray(bounds_hz, dtype=np.float64).reshape(n, 2)
-        # The upper bound is the rigid contact with the stiffest, lightest holder
-        # material of the search space (MODEL.md §7.6): take the material factor out.
-        rigid = bnd[:, 1] / UPPER_BOUND_MATERIAL
-    # Each mode's sensitivity to the contact: log-distance from nominal to rigid contact
-    # (the tool's modes move a lot with the contact, a holder mode hardly).
-    w = np.maximum(np.log(np.maximum(rigid, e) / e), 0.005)
-    if spread_hz is not None:
-        basis = np.log1p(np.asarray(spread_hz, dtype=np.float64).reshape(n, -1) / e[:, None])
-        sigma = options.sigma_mode_spread
-    else:
-        basis = np.column_stack([np.full(n, options.sigma_common), options.sigma_contact * w])
-        sigma = options.sigma_mode
+    bnd, basis, sigma = _guidance(e, bounds_hz, spread_hz, options)
     ok = [True] * len(peaks) if candidates is None else list(candidates)
     hz = np.array([p.hz for p in peaks])
     loud = loud_peaks(peaks, ok, bands, options)
@@ -265,6 +376,7 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
         per_mode.append(near + [i for i in idx[options.max_candidates:] if loud[i]] + [None])
     unit = np.array([
         (options.band_cost if in_bands(p.hz, bands) else 0.0)
+        + (options.faint_cost if p.reliability == "faint" else 0.0)
         + max(0.0, (options.weak_prominence_db - p.prominence_db) / options.weak_prominence_db)
         for p in peaks
     ])
@@ -283,14 +395,17 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
         # A loud peak left unexplained inside the bounds of a mode (between its assigned
         # neighbours) that is missing or took a quieter peak costs: a tip tap rings
         # the bending modes loudest, so it is most likely that mode.
+        left_out = set()
         for m, i in enumerate(combo):
             lo = max([hz[j] for mm, j in chosen if mm < m] + [bnd[m, 0]])
             hi = min([hz[j] for mm, j in chosen if mm > m] + [bnd[m, 1]])
             ceiling = -np.inf if i is None else peaks[i].level_db + options.louder_db
-            if any(loud[k] and k not in combo and lo < hz[k] < hi and peaks[k].level_db > ceiling
-                   for k in range(len(peaks))):
+            here = {k for k in range(len(peaks))
+                    if loud[k] and k not in combo and lo < hz[k] < hi and peaks[k].level_db > ceiling}
+            if here:
                 cost += options.unexplained_cost
-        found.append(Labeling(tuple(combo), float(cost), float(prior)))
+            left_out |= here
+        found.append(Labeling(tuple(combo), float(cost), float(prior), len(left_out)))
     found.sort(key=lambda lab: lab.cost)
     out = found[:max(keep, 1)]
     for k in must_try:
@@ -437,6 +552,8 @@ def apply_labels(peaks: list[Peak], modes, bands=(), *, stationary=None, grown=N
             note = f"bending ({source})"
             if in_bands(pk.hz, bands):
                 note += ", inside the interface band"
+            if pk.reliability == "faint":
+                note += ", faint"
             out.append(replace(pk, kind="bending", mode=mode_of[i], note=note))
         elif grow[i]:
             out.append(replace(pk, kind="local", mode=None, note=NOTE_GROWN))
@@ -445,7 +562,7 @@ def apply_labels(peaks: list[Peak], modes, bands=(), *, stationary=None, grown=N
         elif in_bands(pk.hz, bands):
             out.append(replace(pk, kind="local", mode=None, note="interface band"))
         else:
-            out.append(replace(pk, kind="other", mode=None, note=""))
+            out.append(replace(pk, kind="other", mode=None, note="faint" if pk.reliability == "faint" else ""))
     return out
 
 

@@ -119,6 +119,10 @@ class Peak:
         Peak over the median of its surroundings [dB].
     note : str
         Why it got its kind (e.g. ``"interface band"``, ``"stationary (hum)"``).
+    reliability : str
+        ``"clear"`` (found by :func:`pick_peaks`) or ``"faint"`` (a few dB to ~15 dB over
+        the noise, found only by the guided search of :func:`pick_faint_peaks`: there in
+        every tap and resonance-shaped, but its frequency is less sure).
     """
 
     hz: float
@@ -130,6 +134,7 @@ class Peak:
     prominence_db: float = 0.0
     snr_db: float = 0.0
     note: str = ""
+    reliability: str = "clear"
 
     def to_dict(self) -> dict:
         """Plain dict for JSON (contract keys ``hz, level_db, kind`` first)."""
@@ -674,3 +679,174 @@ def tap_scatter(freq_hz, tap_mag, idx) -> np.ndarray:
         d = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
         out[n] = float(np.std(f[loc] + np.clip(d, -0.5, 0.5) * df, ddof=1))
     return out
+
+
+def _flank_floor_db(db, i: int, inner: int, outer: int) -> float:
+    """Robust local floor [dB] at bin ``i``: the mean of the medians of the two flanks
+    ``[i − outer, i − inner)`` and ``(i + inner, i + outer]`` (a straight line in dB
+    through them, so a peak on the sloping skirt of a louder mode is judged against
+    the skirt, not the far noise)."""
+    left = db[max(i - outer, 0):max(i - inner, 0)]
+    right = db[i + inner + 1:i + outer + 1]
+    meds = [float(np.median(side)) for side in (left, right) if side.size >= 3]
+    return float(np.mean(meds)) if meds else -np.inf
+
+
+def fit_resonance(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
+                  min_half_width_hz: float = 0.5, reach_hz: float | None = None) -> tuple[float, float, float]:
+    """One-mode fit of the averaged magnitude around bin ``i`` against a flat (sloping) floor.
+
+    Over ``±half_hz`` the magnitude is fitted twice, linear in the amplitudes: a
+    straight background alone, and the background plus a single-degree-of-freedom
+    magnitude peak ``c / sqrt(1 + ((f − f0)/γ)²)`` (c > 0; f0 within ``reach_hz`` of bin
+    ``i``, default one bin; γ from ``min_half_width_hz`` to ``half_hz``), by a grid
+    search refined once around its best point. The F ratio is
+    ``((RSS_floor − RSS_peak)/3) / (RSS_peak/(n_eff − 5))`` with ``n_eff`` the bins over
+    the zero-padding factor ``oversample`` (neighbouring bins of a zero-padded spectrum
+    are not independent): a ringing mode gives tens to thousands, noise about 1.
+
+    Returns
+    -------
+    f_ratio : float
+        0 when the window is too short or no positive peak fits.
+    f0_hz : float
+        The fitted peak frequency [Hz] (the bin's when no peak fits): the whole peak's
+        shape places it, steadier than the noisy top of a faint peak.
+    half_width_hz : float
+        The fitted half-power half-width γ [Hz] (≈ ζ·f0).
+    """
+    f = np.asarray(freq_hz)
+    m = np.asarray(mag, dtype=np.float64)
+    df = f[1] - f[0]
+    w = max(int(round(half_hz / df)), 3)
+    a, b = max(i - w, 0), min(i + w + 1, m.size)
+    x, y = f[a:b] - f[i], m[a:b]
+    n_eff = x.size / max(oversample, 1.0)
+    if n_eff < 8:
+        return 0.0, float(f[i]), float("nan")
+    y = y / (float(np.max(np.abs(y))) or 1.0)
+    base = np.column_stack([np.ones_like(x), x / max(half_hz, df)])
+    c0, *_ = np.linalg.lstsq(base, y, rcond=None)
+    rss0 = float(np.sum((y - base @ c0) ** 2))
+    best = [rss0, 0.0, float("nan")]
+
+    def scan(centres, widths):
+        for f0 in centres:
+            for g in widths:
+                a3 = np.column_stack([base, 1.0 / np.sqrt(1.0 + ((x - f0) / g) ** 2)])
+                c, *_ = np.linalg.lstsq(a3, y, rcond=None)
+                if c[2] <= 0:
+                    continue
+                rss = float(np.sum((y - a3 @ c) ** 2))
+                if rss < best[0]:
+                    best[:] = [rss, float(f0), float(g)]
+
+    reach = df if reach_hz is None else max(reach_hz, df)
+    scan(np.linspace(-reach, reach, 17), np.geomspace(max(min_half_width_hz, 0.5 * df), max(half_hz, 2 * df), 16))
+    if best[0] >= rss0:
+        return 0.0, float(f[i]), float("nan")
+    step = reach / 8
+    scan(np.linspace(best[1] - step, best[1] + step, 17), best[2] * np.geomspace(0.7, 1.4, 9))
+    ratio = ((rss0 - best[0]) / 3.0) / (max(best[0], 1e-300) / max(n_eff - 5.0, 1.0))
+    return float(ratio), float(f[i] + best[1]), best[2]
+
+
+def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
+                   min_half_width_hz: float = 0.5) -> float:
+    """F ratio of a resonance-shaped peak over a flat (sloping) local floor at bin ``i``
+    (:func:`fit_resonance`; tens to thousands for a ringing mode, about 1 for noise)."""
+    return fit_resonance(freq_hz, mag, i, half_hz, oversample, min_half_width_hz)[0]
+
+
+def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: float = 8.0,
+                     tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 6.0,
+                     ring_hz: float = 250.0, stationary_margin_db: float = 6.0,
+                     oversample: float = 1.0, per_window: int = 2, min_width_rel: float = 1e-3,
+                     tap_fraction: float = 0.5):
+    """Faint resonances inside search windows: the guided search for missing modes.
+
+    :func:`pick_peaks` demands 15 dB over the noise so that nothing it returns is noise,
+    anywhere in the spectrum. Where the model says a bending mode must be, a lower bar
+    is safe if the peak passes three independent tests: it stands ``min_db`` over the
+    robust local floor (:func:`_flank_floor_db`, flanks from 4 half-power widths out to
+    ``ring_hz``), it is there in *every* tap (each tap stands over its own floor, within
+    one native bin of the averaged peak, by ``tap_db`` and by ``tap_fraction`` of the
+    average's height in dB: a mode rings in every tap alike, while a bump of one tap's
+    noise or a click is not where the others have theirs), and it is shaped like a resonance
+    (:func:`resonance_test` ≥ ``f_ratio``). Peaks less than ``stationary_margin_db``
+    over the between-tap spectrum ``noise_mag`` are hum, not modes.
+
+    Parameters
+    ----------
+    freq_hz, mag : ndarray, shape (m,)
+        Uniform grid [Hz] and averaged linear magnitude.
+    tap_mag : ndarray, shape (k, m)
+        Per-tap magnitudes.
+    windows : sequence of (lo_hz, hi_hz)
+        Where to search [Hz].
+    oversample : float
+        Zero-padding factor of the spectrum (FFT length over segment length).
+    per_window : int
+        At most this many per window, those standing highest over their floor.
+    min_width_rel : float
+        Smallest half-power half-width taken for the floor's flanks and the resonance
+        fit, relative to the frequency (a faint peak's measured width is cut short by
+        the noise ripple).
+
+    Returns
+    -------
+    list of dict
+        ``idx`` (bin), ``hz`` and ``zeta`` (of the one-mode fit, :func:`fit_resonance`:
+        on a faint peak steadier than a pole fit, which can lock onto a noise spike)
+        [Hz, –], ``db`` (level [dB re the unit of ``mag``]), ``over_db`` (over the
+        floor), ``prominence_db``, ``f_ratio`` and ``width_hz`` (the half-power
+        half-width taken), ascending.
+    """
+    f = np.asarray(freq_hz)
+    m = np.asarray(mag, dtype=np.float64)
+    t = np.atleast_2d(np.asarray(tap_mag, dtype=np.float64))
+    db = 20 * np.log10(m + 1e-300)
+    tdb = 20 * np.log10(t + 1e-300)
+    ndb = None if noise_mag is None else 20 * np.log10(np.asarray(noise_mag) + 1e-300)
+    df = f[1] - f[0]
+    ring = max(int(round(ring_hz / df)), 4)
+    found = {}
+    for lo_hz, hi_hz in windows:
+        lo, hi = max(int(np.ceil(lo_hz / df)), 1), min(int(np.floor(hi_hz / df)), f.size - 2)
+        if hi - lo < 3:
+            continue
+        idx, props = find_peaks(db[lo:hi + 1], prominence=prominence_db)
+        keep = []
+        for i, prom in zip(idx + lo, props["prominences"]):
+            # A faint peak's half-power width is cut short by the noise ripple: at least
+            # ``min_width_rel`` × f (ζ ≈ 0.1–0.5 % of a tool-holder mode) counts.
+            hw = max(half_power_width(f, m, int(i), max_hz=ring_hz / 2), min_width_rel * f[i])
+            inner = max(int(np.ceil(4 * hw / df)), 3)
+            over = db[i] - _flank_floor_db(db, int(i), inner, inner + ring)
+            if over < min_db:
+                continue
+            if ndb is not None and db[i] - float(np.max(ndb[max(i - 2, 0):i + 3])) < stationary_margin_db:
+                continue
+            # Each tap's own maximum lies within one native bin (1/segment) of the average's.
+            reach = max(int(round(oversample)), 2)
+            taps_over = [float(np.max(tdb[k, max(i - reach, 0):i + reach + 1]))
+                         - _flank_floor_db(tdb[k], int(i), inner, inner + ring) for k in range(t.shape[0])]
+            if min(taps_over) < max(tap_db, tap_fraction * over):
+                continue
+            ratio, f0, gamma = fit_resonance(f, m, int(i), half_hz=max(4 * hw, 8 * df * oversample),
+                                             oversample=oversample, reach_hz=hw)
+            if ratio < f_ratio:
+                continue
+            _, lev = parabolic_peak(db, int(i))
+            keep.append({"idx": int(i), "hz": f0, "zeta": gamma / f0, "db": float(lev), "over_db": float(over),
+                         "prominence_db": float(prom), "f_ratio": ratio, "width_hz": float(hw)})
+        keep.sort(key=lambda c: -c["over_db"])
+        # Noise splits the top of a faint resonance into several maxima: the highest stands
+        # for the others within two of its half-power widths on either side.
+        chosen = []
+        for c in keep:
+            if all(abs(c["hz"] - q["hz"]) > 2 * q["width_hz"] for q in chosen):
+                chosen.append(c)
+        for c in chosen[:per_window]:
+            found[c["idx"]] = c
+    return [found[i] for i in sorted(found)]

@@ -76,3 +76,18 @@ def test_relabelled_replaces_only_the_missing_mode_warning():
     assert after.warnings == [other, "chose mode 2 = 9000 Hz"]
     fewer = relabelled(before, [0, None, None], [])
     assert fewer.warnings == [other, "only 1 of 3 bending modes found (missing mode 2, 3)"]
+
+
+def test_a_faint_peak_pulls_the_quick_fit_less(reference_assembly):
+    # Mode 2 measured 3 % off the others' explanation: as a faint peak (twice the
+    # tolerance) it moves the fitted model less and costs less than as a clear one.
+    from taptune.model.reduced import FastEvaluator
+
+    ev = FastEvaluator(reference_assembly)
+    f = np.asarray(analyse(reference_assembly, NOMINAL, ModelOptions()).bending_hz[:3])
+    measured = {1: f[0], 2: 1.03 * f[1], 3: f[2]}
+    clear_cost, clear_hz, _ = quick_fit(ev, measured, 0.01)
+    faint_cost, faint_hz, _ = quick_fit(ev, measured, {1: 0.01, 2: 0.02, 3: 0.01})
+    assert faint_cost < clear_cost
+    assert abs(faint_hz[1] / measured[2] - 1) > abs(clear_hz[1] / measured[2] - 1)
+    assert abs(faint_hz[0] / f[0] - 1) <= abs(clear_hz[0] / f[0] - 1) + 1e-6
