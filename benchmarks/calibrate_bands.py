@@ -55,10 +55,10 @@ def records(split: str, n: int, cache: Path) -> list[dict]:
 def band_method(model_form=None, rows_out=None):
     """``band(sets, assembly, record)`` for run.reevaluate: the product's band with these
     model-form coefficients (None: bands.MODEL_FORM); collects per-mode components in rows_out."""
-    from benchmarks.realism.corpus import make_case
+    from benchmarks.realism.corpus import case_of
 
     def band(sets, asm, rec):
-        case = make_case(rec["split"], rec["index"])
+        case = case_of(rec)
         p = predict(sets, asm, relative_floor=rec["identification"]["relative_floor"],
                     identified=[case.described], model_form=model_form)
         if rows_out is not None:
