@@ -113,8 +113,12 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, t
     }
     out["cpu_s"] = round(cpu, 3)
     t1 = time.process_time()
-    out["predictions"] = predictions(case, lambda asm: predict(result.param_sets, asm),
-                                     result.bending_measured_hz[0])
+    # As the library predicts (taptune.library.schema.Entry.predict): the fit's misfit floor,
+    # the identified assembly (Δ stick-out) and the modes the tap measured.
+    measured = [m is not None for m in result.bending_measured_hz[0]]
+    out["predictions"] = predictions(case, lambda asm: predict(
+        result.param_sets, asm, relative_floor=result.relative_floor, identified=[case.described],
+        measured_modes=measured), result.bending_measured_hz[0])
     out["predict_cpu_s"] = round(time.process_time() - t1, 3)
     return out
 
@@ -308,9 +312,27 @@ def main(argv=None) -> int:
         meta = {"split": args.split, "tier": args.tier, "ablate": args.ablate, "taptune": os.path.dirname(taptune.__file__),
                 "code": os.environ.get("REALISM_CODE", ""), "n": args.n, "start": args.start, "seed": args.seed, "jobs": args.jobs,
                 "wall_s": round(time.time() - t0, 1), "load": round(os.getloadavg()[0], 2)}
-        with open(args.out, "w", encoding="utf-8") as fh:
-            json.dump({"meta": meta, "summary": summary, "cases": records}, fh, indent=1)
+        write_results(args.out, {"meta": meta, "summary": summary, "cases": records})
     return 0
+
+
+def write_results(path: str, data: dict, limit: int = 200_000) -> int:
+    """Write a results JSON, kept under ``limit`` bytes for the repository: indented when
+    it fits, else the parameter sets rounded to 9 significant digits (predictions move by
+    ~1e-9), no indentation, and without the truth holder's and the recording's description
+    (:func:`~benchmarks.realism.corpus.case_of` rebuilds both). Returns the size [bytes]."""
+    text = json.dumps(data, indent=1)
+    if len(text) > limit:
+        for rec in data["cases"]:
+            rec.pop("truth_holder", None)
+            rec.pop("recording", None)
+            ident = rec.get("identification")
+            if ident:
+                ident["param_sets"] = [{k: float(f"{v:.9g}") for k, v in p.items()} for p in ident["param_sets"]]
+        text = json.dumps(data, separators=(",", ":"))
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    return len(text)
 
 
 if __name__ == "__main__":
