@@ -25,7 +25,10 @@ No good holder reads ``differs``, no worn one ``consistent``. The worn holders r
 inconclusive where the true shift is about one band (che007 1.25 % vs ±1.28 %, che009
 2.8 % vs ±2.9 %, inf007 2.1 % vs ±1.35 %) or the identification itself is off (che008).
 
-    python -m benchmarks.bench_check --n 12 [--split check|infamily] [--jobs 2] [--out check.json]
+    python -m benchmarks.bench_check --n 12 [--split check|infamily] [--tier harsh|issue] [--jobs 2] [--out check.json]
+
+``--tier issue`` draws the reference holders from the corpus's issue tier (the holders
+issue 9 describes, see benchmarks.realism.corpus) instead of the harsh one.
 """
 
 from __future__ import annotations
@@ -39,8 +42,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 
-def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
-    """Identify reference ``index`` of ``split`` and check its pairs; one row per pair."""
+def run_reference(index: int, folder: str, split: str = "check", tier: str = "harsh") -> list[dict]:
+    """Identify reference ``index`` of ``split`` (corpus ``tier``) and check its pairs; one row per pair."""
     from benchmarks.realism.audio import record
     from benchmarks.realism.corpus import elsewhere, make_case, worn
     from taptune.errors import TaptuneError
@@ -50,7 +53,7 @@ def run_reference(index: int, folder: str, split: str = "check") -> list[dict]:
     from taptune.library.checks import check_holder
     from taptune.library.record import entry_from_identification
 
-    ref = make_case(split, index)
+    ref = make_case(split, index, tier=tier)
     rec = record(ref, path=str(Path(folder) / f"{ref.name}.wav"))
     write_audio(rec.path, rec.samples, rec.sample_rate, rec.subtype)  # the library hashes the file
     t0 = time.process_time()
@@ -117,6 +120,8 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=12, help="reference holders")
     ap.add_argument("--first", type=int, default=0, help="first reference index")
     ap.add_argument("--split", default="check", help="corpus split: check (held out) or infamily (the control)")
+    ap.add_argument("--tier", default="harsh", choices=("harsh", "issue"),
+                    help="corpus tier of the reference holders (issue: the holders of issue 9)")
     ap.add_argument("--out", help="write every row as JSON")
     ap.add_argument("--jobs", type=int, default=1, help="reference holders run in parallel (processes)")
     ap.add_argument("--rejudge", metavar="JSON", help="only re-evaluate saved rows with scaled and floored bands")
@@ -132,7 +137,8 @@ def main(argv=None) -> int:
     folder = tempfile.mkdtemp(prefix="bench-check-")
     indices = range(args.first, args.first + args.n)
     with ProcessPoolExecutor(max(args.jobs, 1)) as pool:
-        for new in pool.map(run_reference, indices, [folder] * len(indices), [args.split] * len(indices)):
+        for new in pool.map(run_reference, indices, [folder] * len(indices), [args.split] * len(indices),
+                            [args.tier] * len(indices)):
             rows += new
             for r in new:
                 print(f"{r['reference']:<28} {r.get('kind', ''):<20} expected {r.get('expected', ''):<11} "

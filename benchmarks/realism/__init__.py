@@ -4,11 +4,13 @@ Use it to measure, never to tune one case (issue 9). Public API::
 
     from benchmarks.realism.corpus import make_corpus, make_case, check_pairs, worn, elsewhere, KINDS
     from benchmarks.realism.audio import record, write_case, audible_modes, audibility_margins, write_check_pairs
-    from benchmarks.realism.corpus import without
+    from benchmarks.realism.corpus import without, case_of
     from benchmarks.realism.truth import TruthHolder, Profile, ExtraMass, truth_modes, truth_receptance
     from benchmarks.realism.run import run_case, summarise, print_summary, reevaluate
 
     cases = make_corpus("validation", 24)      # or "calibration", "infamily" (disjoint seeds)
+    cases = make_corpus("validation", 24, tier="issue")  # the holders issue 9 describes (names i*)
+    case_of(record)                            # the case of a stored results record (split, index, tier)
     case = cases[0]
     case.described                             # Assembly: what the user's TOML says (recorded stick-out)
     case.described_at(q.stickout_mm)           # ... at a query stick-out (what predict gets)
@@ -39,9 +41,13 @@ the ruler error alone moves the truth), ``cpu_s``.
 Command line (one identification ≈ 5 CPU-s; results JSON keeps every param_set, so
 band methods can be re-evaluated offline with ``summarise``)::
 
-    python -m benchmarks.realism.run --split validation --n 24 --out results.json [--jobs 2] [--ablate KIND]
+    python -m benchmarks.realism.run --split validation --n 24 --out results.json [--jobs 2] [--ablate KIND] \
+        [--tier issue] [--table]
     python -m benchmarks.realism.attribute --split validation --n 24   # truth-only, per deviation
 
 Baselines (taptune 0c95237, before issue 9): ``benchmarks/realism/baseline_<split>.json``
-for ``validation`` (24), ``calibration`` (24) and ``infamily`` (12).
+for ``validation`` (24), ``calibration`` (24) and ``infamily`` (12). Issue tier (taptune
+main f1b05df, before the issue-9 band work): ``results_issue_<split>.json`` for
+``calibration`` and ``validation`` (24 each); the bands are calibrated on them with
+``benchmarks/calibrate_bands.py`` (its docstring has the whole loop).
 """

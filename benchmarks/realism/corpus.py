@@ -22,6 +22,21 @@ cannot come out further), with the truth's bending frequencies there.
 Splits have disjoint seeds: ``calibration`` (for tuning band methods), ``validation``
 (never tune on it), ``infamily`` (the control: truth = the product model, description
 exact). :func:`check_pairs` gives held-out pairs for ``taptune check``.
+
+Two tiers (``make_case(..., tier=)``):
+
+* ``harsh`` (default, the names above, e.g. ``cal003``): each deviation drawn with the
+  probabilities of :func:`_try_case` and the wide ranges listed above (gaps in the grip,
+  flute ratios 0.72–0.86, any stick-out the holder allows).
+* ``issue`` (names prefixed ``i``, e.g. ``ical003``; seeds = the split's + 500 000, so
+  disjoint from the harsh tier): the holders issue 9 describes. Every grip has a
+  non-linear contact profile (soft front edge or crowned), the stick-out is read off a
+  ruler (±0.4 mm, at the identification and afresh at every query), holder diameters
+  ±1.5 %, a true flute ratio 0.77–0.83, stick-outs 3–6·D with the flutes clear of the
+  holder, a collet nut on half the collet chucks, a doublet on a third of the cases and a
+  phone-like recording on 40 %.
+
+:func:`case_of` rebuilds the case of a stored record (split, index, tier, ablation).
 """
 
 from __future__ import annotations
@@ -40,6 +55,9 @@ from taptune.signal.synth import Nuisances
 MM = 1e-3
 KINDS = ("profile", "stickout", "diameters", "flute", "mass", "doublet", "lowgrade")
 SPLIT_SEEDS = {"calibration": 1_000_000, "validation": 2_000_000, "check": 3_000_000, "infamily": 4_000_000}
+TIERS = ("harsh", "issue")
+#: Added to the split's seeds in the ``issue`` tier (disjoint from the harsh tier's).
+ISSUE_SEED_OFFSET = 500_000
 # Interface local modes of HSK-A63 (taptune.synthetic): (f_hz, zeta, rel_peak).
 LOCAL_MODES = ((9700.0, 0.0015, 1.5), (10200.0, 0.0018, 0.8))
 RULER_MM = 0.4
@@ -129,6 +147,7 @@ class Case:
     kinds: tuple
     true_od_factors: tuple = field(default=())
     true_flute_ratio: float = 0.8
+    tier: str = "harsh"
 
     def described_at(self, stickout_mm: float) -> Assembly:
         """The described assembly at another stick-out [mm] (what the user would predict)."""
@@ -141,7 +160,7 @@ class Case:
     def to_dict(self) -> dict:
         t = self.described.tool
         return {
-            "name": self.name, "split": self.split, "seed": self.seed, "family": self.family,
+            "name": self.name, "split": self.split, "tier": self.tier, "seed": self.seed, "family": self.family,
             "kinds": list(self.kinds),
             "holder_name": self.described.holder.name,
             "tool": {"diameter_mm": t.flute_diameter / MM, "total_length_mm": t.total_length / MM,
@@ -236,10 +255,13 @@ def min_insertion_mm(family, d: float) -> float:
     return max(0.65 * family.clamp_mm, 2.5 * d, 15.0)
 
 
-def _query_offsets(rng, insert_mm: float, min_insert: float, max_insert: float, stickout: float, flute: float):
-    """Two described stick-out offsets [mm]: +10/+20 when the tool can come out so far, else −10 too."""
+def _query_offsets(rng, insert_mm: float, min_insert: float, max_insert: float, stickout: float, flute: float,
+                   stickout_range=(0.0, np.inf)):
+    """Two described stick-out offsets [mm]: +10/+20 when the tool can come out so far, else −10 too
+    (the stick-out there inside ``stickout_range`` [mm])."""
     ok = [o for o in (10.0, 20.0, -10.0, 5.0, 15.0, -5.0)
-          if min_insert <= insert_mm - o <= max_insert and stickout + o >= flute + 1.0]
+          if min_insert <= insert_mm - o <= max_insert and stickout + o >= flute + 1.0
+          and stickout_range[0] <= stickout + o <= stickout_range[1]]
     if len(ok) < 2:
         return None
     preferred = [o for o in ok if o in (10.0, 20.0)]
@@ -248,15 +270,30 @@ def _query_offsets(rng, insert_mm: float, min_insert: float, max_insert: float, 
     return tuple(sorted(rng.choice(ok, size=2, replace=False).tolist()))
 
 
-def make_case(split: str, index: int, in_family: bool = False) -> Case:
-    """Case ``index`` of ``split`` (deterministic; redraws until the geometry is valid)."""
-    seed = SPLIT_SEEDS[split] + index
+def make_case(split: str, index: int, in_family: bool = False, tier: str = "harsh") -> Case:
+    """Case ``index`` of ``split`` in ``tier`` (deterministic; redraws until the geometry is valid).
+
+    ``tier``: ``"harsh"`` (default) or ``"issue"`` (see the module docstring).
+    """
+    if tier not in TIERS:
+        raise ValueError(f"unknown tier {tier!r}: use {' or '.join(TIERS)}")
+    seed = SPLIT_SEEDS[split] + index + (ISSUE_SEED_OFFSET if tier == "issue" else 0)
     rng = np.random.default_rng(seed)
+    try_ = _try_case if tier == "harsh" else _try_issue_case
     for _ in range(100):
-        case = _try_case(rng, split, index, seed, in_family or split == "infamily")
+        case = try_(rng, split, index, seed, in_family or split == "infamily")
         if case is not None:
             return case
-    raise RuntimeError(f"no valid geometry for {split} {index}")
+    raise RuntimeError(f"no valid geometry for {split} {index} ({tier} tier)")
+
+
+def case_of(record: dict) -> Case:
+    """The case of a stored :func:`benchmarks.realism.run.run_case` record (split, index,
+    tier; records without a tier are ``harsh``), with its ablation applied."""
+    case = make_case(record["split"], record["index"], tier=record.get("tier", "harsh"))
+    if record.get("ablate") and record["ablate"] in case.kinds:
+        case = without(case, record["ablate"])
+    return case
 
 
 def _try_case(rng, split, index, seed, in_family) -> Case | None:
@@ -323,11 +360,73 @@ def _try_case(rng, split, index, seed, in_family) -> Case | None:
                 queries=tuple(queries), kinds=tuple(kinds), true_od_factors=od_f, true_flute_ratio=ratio)
 
 
-def make_corpus(split: str, n: int) -> list[Case]:
-    """The first ``n`` cases of a split (``calibration``, ``validation`` or ``infamily``)."""
+def _try_issue_case(rng, split, index, seed, in_family) -> Case | None:
+    """A case of the ``issue`` tier (module docstring): the deviations issue 9 describes."""
+    family = FAMILIES[index % len(FAMILIES)]
+    d = float(rng.choice(family.diameters))
+    total, flute = TOOLS[int(d)][int(rng.integers(2))]
+    name = f"i{split[:3]}{index:03d}-{family.key}-D{d:g}"
+    holder_name = f"{family.title} D{d:g} [realism {name}]"
+    described_holder = make_holder(family, d, holder_name)
+    max_insert = min(max_insertion_mm(described_holder, d), total - flute - 1.0)
+    min_insert = min_insertion_mm(family, d)
+    # Stick-outs 3–6·D, here and at the queries (flutes clear of the holder: insert ≤ total − flute − 1).
+    lo, hi = max(min_insert, total - 6.0 * d), min(max_insert, total - 3.0 * d)
+    if hi < lo + 2.0 or max_insert < min_insert + 10.0:
+        return None
+    insert = float(np.round(rng.uniform(lo, hi) * 2) / 2)
+    stickout = total - insert
+    offsets = _query_offsets(rng, insert, min_insert, max_insert, stickout, flute, (3.0 * d, 6.0 * d))
+    if offsets is None:
+        return None
+    ruler = 0.0 if in_family else RULER_MM
+    od_f = (1.0,) * len(described_holder.segments)
+    ratio = 0.8
+    profile, mass, asym, asym_kind, angle = Profile("linear"), ExtraMass(), 0.0, "contact", 0.0
+    low_grade = False
+    kinds = []
+    if not in_family:
+        kinds = ["stickout", "profile", "diameters", "flute"]
+        if rng.uniform() < 0.6:
+            profile = Profile("soft_front", depth=float(rng.uniform(0.2, 0.7)),
+                              length_mm=float(rng.uniform(0.15, 0.30) * family.clamp_mm))
+        else:
+            profile = Profile("crowned", depth=float(rng.uniform(0.3, 0.8)))
+        od_f = tuple(float(f) for f in 1 + rng.uniform(-DIAMETER_REL, DIAMETER_REL, len(od_f)))
+        ratio = float(rng.uniform(0.77, 0.83))
+        if family.collet and rng.uniform() < 0.5:
+            mass = draw_mass(rng, True, described_holder.length / MM)
+            kinds.append("mass")
+        if rng.uniform() < 1 / 3:
+            asym, asym_kind, angle = float(rng.uniform(0.003, 0.015)), str(rng.choice(["contact", "section"])), float(rng.uniform(0, 90))
+            kinds.append("doublet")
+        low_grade = bool(rng.uniform() < 0.4)
+        if low_grade:
+            kinds.append("lowgrade")
+    holder = TruthHolder(draw_params(rng), profile, mass, asym, asym_kind, angle)
+    try:
+        described = assemble_geometry(described_holder, make_tool(d, total, flute), stickout, f"{name}.toml")
+        true_asm = assemble_geometry(make_holder(family, d, holder_name, od_f), make_tool(d, total, flute, ratio),
+                                     stickout + float(rng.uniform(-ruler, ruler)), f"{name} (truth)")
+        queries = []
+        for off in offsets:
+            q_true = stickout + off + float(rng.uniform(-ruler, ruler))
+            queries.append(make_query(true_asm, holder, stickout + off, q_true))
+        truth = truth_modes(true_asm, holder)
+    except InputError:
+        return None
+    recording = draw_recording(rng, low_grade, truth.bending_hz)
+    return Case(name=name, split=split, seed=seed, family=family.key, described=described,
+                true_assembly=true_asm, holder=holder, recording=recording, truth=truth,
+                queries=tuple(queries), kinds=tuple(kinds), true_od_factors=od_f, true_flute_ratio=ratio,
+                tier="issue")
+
+
+def make_corpus(split: str, n: int, tier: str = "harsh") -> list[Case]:
+    """The first ``n`` cases of a split (``calibration``, ``validation`` or ``infamily``) in ``tier``."""
     if split not in SPLIT_SEEDS or split == "check":
         raise ValueError(f"unknown split {split!r}: use calibration, validation or infamily (check_pairs for pairs)")
-    return [make_case(split, i) for i in range(n)]
+    return [make_case(split, i, tier=tier) for i in range(n)]
 
 
 # ----------------------------------------------------------------------------- check pairs

@@ -8,9 +8,11 @@ stored (the near-optimal ``param_sets`` of every identification).
 
 Run::
 
-    python -m benchmarks.realism.run --split validation --n 24 --out results.json [--jobs 1]
+    python -m benchmarks.realism.run --split validation --n 24 --out results.json [--jobs 1] [--tier issue] [--table]
 
 ``--split infamily`` is the control (truth = the product model, description exact).
+``--tier issue`` measures the holders issue 9 describes (benchmarks.realism.corpus);
+``--table`` prints one row per case (label, error and coverage per prediction).
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from benchmarks.realism.audio import AUDIBLE_DB  # noqa: E402
-from benchmarks.realism.corpus import KINDS, make_case, without  # noqa: E402
+from benchmarks.realism.corpus import KINDS, TIERS, case_of, make_case, without  # noqa: E402
 
 MODES = (1, 2, 3)
 LOUD_DB = 15.0
@@ -64,18 +66,19 @@ def judge_labels(case, analysis, margins) -> list[dict]:
     return out
 
 
-def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None) -> dict:
+def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, tier: str = "harsh") -> dict:
     """Identify one case and predict its queries; a JSON-ready record.
 
     ``ablate`` names a deviation of :data:`~benchmarks.realism.corpus.KINDS` to remove first
-    (:func:`~benchmarks.realism.corpus.without`), to see what it costs.
+    (:func:`~benchmarks.realism.corpus.without`), to see what it costs; ``tier`` is the
+    corpus tier (``harsh`` or ``issue``).
     """
     from benchmarks.realism.audio import audibility_margins, record
     from taptune.errors import TaptuneError
     from taptune.identify import IdentifyOptions, predict
     from taptune.identify.pipeline import identify_recordings
 
-    case = make_case(split, index)
+    case = make_case(split, index, tier=tier)
     if ablate and ablate in case.kinds:
         case = without(case, ablate)
     out = {"index": index, "ablate": ablate, **case.to_dict()}
@@ -110,8 +113,12 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None) -
     }
     out["cpu_s"] = round(cpu, 3)
     t1 = time.process_time()
-    out["predictions"] = predictions(case, lambda asm: predict(result.param_sets, asm),
-                                     result.bending_measured_hz[0])
+    # As the library predicts (taptune.library.schema.Entry.predict): the fit's misfit floor,
+    # the identified assembly (Δ stick-out) and the modes the tap measured.
+    measured = [m is not None for m in result.bending_measured_hz[0]]
+    out["predictions"] = predictions(case, lambda asm: predict(
+        result.param_sets, asm, relative_floor=result.relative_floor, identified=[case.described],
+        measured_modes=measured), result.bending_measured_hz[0])
     out["predict_cpu_s"] = round(time.process_time() - t1, 3)
     return out
 
@@ -157,9 +164,7 @@ def reevaluate(records: list[dict], band) -> list[dict]:
         if "failed" in rec:
             out.append(rec)
             continue
-        case = make_case(rec["split"], rec["index"])
-        if rec.get("ablate"):
-            case = without(case, rec["ablate"])
+        case = case_of(rec)
         sets = [HolderParams(**p) for p in rec["identification"]["param_sets"]]
         measured = rec["identification"]["bending_measured_hz"]
         out.append({**rec, "predictions": predictions(case, lambda asm: band(sets, asm, rec), measured)})
@@ -249,6 +254,26 @@ def print_summary(s: dict, title: str) -> None:
     print(f"CPU per identification: median {c['median']} s, max {c['max']} s; total {c['total']} s")
 
 
+def print_table(records: list[dict]) -> None:
+    """One row per case: deviations, labels (right/audible), then each prediction's
+    error [%] (``!`` outside its band) and the median half-width [%]."""
+    print(f"\n{'case':28s} {'deviations':44s} {'labels':>6s} {'±med%':>6s}  errors % per query x mode (! = not covered)")
+    for r in records:
+        audible = [lab for lab in r.get("labels", []) if lab["audible"]]
+        labels = f"{sum(lab['right'] for lab in audible)}/{len(audible)}"
+        kinds = ",".join(k for k in r["kinds"] if k not in ("stickout", "profile", "diameters", "flute"))
+        kinds = (r.get("truth_holder", {}).get("profile", {}).get("kind", "") + " " + kinds).strip()
+        if "failed" in r:
+            print(f"{r['name']:28s} {kinds:44s} {labels:>6s} {'':>6s}  FAILED {r['failed'][:60]}")
+            continue
+        preds = r["predictions"]
+        half = float(np.median([p["half_width_pct"] for p in preds])) if preds else float("nan")
+        errs = " ".join(f"{p['error_pct']:+.2f}{'' if p['covered'] else '!'}{'' if p['measured'] else '?'}"
+                        for p in preds)
+        print(f"{r['name']:28s} {kinds:44s} {labels:>6s} {half:6.2f}  {errs}")
+    print("(? = mode not measured in the tap)")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", default="validation", choices=("calibration", "validation", "infamily"))
@@ -258,34 +283,56 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="cases identified in parallel processes")
     ap.add_argument("--out", default=None, help="results JSON")
     ap.add_argument("--ablate", default=None, choices=KINDS, help="remove this deviation from every case")
+    ap.add_argument("--tier", default="harsh", choices=TIERS, help="corpus tier (issue: the holders of issue 9)")
+    ap.add_argument("--table", action="store_true", help="print one row per case")
     args = ap.parse_args(argv)
     t0 = time.time()
     indices = range(args.start, args.start + args.n)
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
             records = list(pool.map(run_case, [args.split] * args.n, indices, [args.seed] * args.n,
-                                    [args.ablate] * args.n))
+                                    [args.ablate] * args.n, [args.tier] * args.n))
     else:
         records = []
         for i in indices:
-            records.append(run_case(args.split, i, args.seed, args.ablate))
+            records.append(run_case(args.split, i, args.seed, args.ablate, args.tier))
             r = records[-1]
             print(f"{r['name']:28s} {','.join(r['kinds']):45s} cpu {r['cpu_s']:6.2f} s  "
                   + ("FAILED " + r["failed"] if "failed" in r else
                      "err% " + " ".join(f"{p['error_pct']:+.2f}{'' if p['covered'] else '!'}" for p in r["predictions"])),
                   flush=True)
     summary = summarise(records)
-    print_summary(summary, f"{args.split} (seed {args.seed})")
+    if args.table:
+        print_table(records)
+    print_summary(summary, f"{args.split}, {args.tier} tier (seed {args.seed})")
     print(f"wall {time.time() - t0:.0f} s with {args.jobs} job(s), load {os.getloadavg()[0]:.1f}")
     if args.out:
         import taptune
 
-        meta = {"split": args.split, "ablate": args.ablate, "taptune": os.path.dirname(taptune.__file__),
+        meta = {"split": args.split, "tier": args.tier, "ablate": args.ablate, "taptune": os.path.dirname(taptune.__file__),
                 "code": os.environ.get("REALISM_CODE", ""), "n": args.n, "start": args.start, "seed": args.seed, "jobs": args.jobs,
                 "wall_s": round(time.time() - t0, 1), "load": round(os.getloadavg()[0], 2)}
-        with open(args.out, "w", encoding="utf-8") as fh:
-            json.dump({"meta": meta, "summary": summary, "cases": records}, fh, indent=1)
+        write_results(args.out, {"meta": meta, "summary": summary, "cases": records})
     return 0
+
+
+def write_results(path: str, data: dict, limit: int = 200_000) -> int:
+    """Write a results JSON, kept under ``limit`` bytes for the repository: indented when
+    it fits, else the parameter sets rounded to 9 significant digits (predictions move by
+    ~1e-9), no indentation, and without the truth holder's and the recording's description
+    (:func:`~benchmarks.realism.corpus.case_of` rebuilds both). Returns the size [bytes]."""
+    text = json.dumps(data, indent=1)
+    if len(text) > limit:
+        for rec in data["cases"]:
+            rec.pop("truth_holder", None)
+            rec.pop("recording", None)
+            ident = rec.get("identification")
+            if ident:
+                ident["param_sets"] = [{k: float(f"{v:.9g}") for k, v in p.items()} for p in ident["param_sets"]]
+        text = json.dumps(data, separators=(",", ":"))
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    return len(text)
 
 
 if __name__ == "__main__":

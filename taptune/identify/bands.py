@@ -18,38 +18,55 @@ per mode, in Hz::
   between the identified and the predicted assembly counts.
 * **model form** — what the model itself cannot represent (a contact pressure that is
   not linear along the grip, a collet nut or a coolant tube the file leaves out, an
-  asymmetric holder): ``c_mode × f × (1 + Δ/10 mm)`` with Δ the stick-out change from the
-  nearest identification, calibrated by split-conformal prediction on a corpus of
-  holders outside the model family (:data:`MODEL_FORM`; ``benchmarks/calibrate_bands.py``).
+  asymmetric holder): ``c × f × (1 + Δ/DELTA_REF_MM)`` with Δ the stick-out change from
+  the nearest identification. The coefficient c depends on the prediction's **evidence
+  group** (:func:`evidence_groups`): ``pinned`` — the near-optimal parameter sets agree on
+  this frequency within :data:`PINNED_SPREAD`; ``free`` — they do not; ``unknown`` — the
+  mode was not measured in the tap, or there is a single parameter set. c is calibrated
+  per group (Mondrian split-conformal prediction, :func:`conformal_quantile`) on a corpus
+  of holders outside the model family (:data:`MODEL_FORM`; ``benchmarks/calibrate_bands.py``).
 
-The calibration targets 90 % coverage per mode; the validation split, never used to
-calibrate, measures it.
+The calibration targets 90 % coverage in each group; the validation splits, never used
+to calibrate, measure it.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from taptune.io.assembly import Segment, Tolerances
 
-#: Model-form coefficients c_mode (relative, per mode 1–3) of ``c × f × (1 + Δ/DELTA_REF)``:
-#: per mode, the split-conformal quantile at level ⌈0.9 (n + 1)⌉ / n of the smallest c
-#: that covers each prediction's error given its set and geometry parts. Calibration
-#: split of benchmarks/realism (24 cases, 48 query stick-outs, n = 48 per mode; the
-#: identifications of baseline_calibration.json, default tolerances):
-#: ``python benchmarks/calibrate_bands.py --records benchmarks/realism/baseline_calibration.json``.
-#: Set and geometry alone covered 85 % there (modes 85/81/88 %); with these, 94 %.
-#: Scaling the geometry part by a calibrated factor was tried (0–1.25): 1 gave the
-#: narrowest bands of well-identified predictions at the same coverage.
-MODEL_FORM = (0.00549, 0.00763, 0.00351)
-DELTA_REF_MM = 10.0
+#: Evidence groups of a prediction (see :func:`evidence_groups`).
+GROUPS = ("pinned", "free", "unknown")
+#: Near-optimal sets agreeing within this (relative) on a frequency pin it.
+PINNED_SPREAD = 0.002
+#: Model-form coefficients c per evidence group of ``c × f × (1 + Δ/DELTA_REF_MM)``
+#: (a number for every mode, or one per mode 1–3): the Mondrian split-conformal quantile
+#: at level ⌈0.9 (n + 1)⌉ / n of the smallest c that covers each prediction's error given
+#: its set and geometry parts, per group (CALIBRATION says on what). Written by
+#: ``python benchmarks/calibrate_bands.py --records … --write`` (its docstring has the loop).
+#: 2026-11-25, taptune main f1b05df identifications, issue + harsh calibration tiers
+#: (288 predictions: pinned 77, free 105, unknown 106). Validation (never calibrated on):
+#: issue tier 92.4 % covered (pinned 96, free 93, unknown 88 %), median ± 2.8 % (measured
+#: modes 1.8 %); harsh tier 92.0 %, 4.0 %; in-family 100 %, 1.9 %. ``unknown`` is 0: the
+#: near-optimal sets' spread of a mode the tap did not measure covers it already. The
+#: smallest c, so a caller that does not pass ``measured_modes`` (groups by spread only)
+#: gets a band at least as wide. Tried and not kept (calibrate_bands.py --variants): c per
+#: group and mode (wider: 3.0 % on issue validation), the set part × 0.5 or × 0 (wider,
+#: harsh coverage 88–89 %), the geometry part × 0–0.75 (wider), no growth with Δ (same
+#: widths; left out, the error must grow from Δ = 0).
+MODEL_FORM = {"pinned": 0.00744, "free": 0.0131, "unknown": 0.0}
+#: Δref of the growth with the stick-out change [mm], fitted among 5/10/20/40 mm on the
+#: calibration records (smallest median half-width; the four differ by < 0.05 %).
+DELTA_REF_MM = 40.0
 #: Stick-out change assumed when the identified stick-outs are unknown [mm].
 DELTA_UNKNOWN_MM = 20.0
 COVERAGE = 0.90
-CALIBRATION = "realism corpus, calibration split, 24 holders, split-conformal 90 %"
+CALIBRATION = "realism corpus (baseline_calibration.json, results_issue_calibration.json: 48 holders, 288 predictions), Mondrian split-conformal 90 % per evidence group"
 METHOD = "sqrt(set^2 + geometry^2 + model_form^2)"
 #: A single-recording band wider than this (relative) suggests a second tap.
 WIDE_BAND = 0.01
@@ -72,6 +89,9 @@ class Band:
     recordings : int
         Identifications the holder's parameters come from.
     tolerances : Tolerances
+    model_form_groups : tuple of str
+        Evidence group of each mode (``pinned``, ``free`` or ``unknown``, see
+        :func:`evidence_groups`): which model-form coefficient it got.
     """
 
     half_width_hz: tuple[float, ...]
@@ -85,6 +105,7 @@ class Band:
     coverage: float = COVERAGE
     method: str = METHOD
     calibration: str = CALIBRATION
+    model_form_groups: tuple[str, ...] = ()
 
     def relative(self, bending_hz) -> np.ndarray:
         """Half-widths relative to the frequencies."""
@@ -100,6 +121,7 @@ class Band:
             "half_width_hz": r(self.half_width_hz),
             "components_hz": {"set": r(self.set_hz), "geometry": r(self.geometry_hz),
                               "model_form": r(self.model_form_hz)},
+            "model_form_groups": list(self.model_form_groups),
             "geometry_parts_hz": {k: r(v) for k, v in self.geometry_parts_hz.items()},
             "tolerances": self.tolerances.to_dict(),
             "delta_stickout_mm": None if self.delta_stickout_mm is None else round(self.delta_stickout_mm, 3),
@@ -117,8 +139,17 @@ class Band:
         main = names[int(np.argmax(parts.sum(axis=1)))]
         where = ("" if self.delta_stickout_mm is None
                  else f" {self.delta_stickout_mm:.0f} mm from the tapped stick-out,")
+        evidence = ""
+        if self.model_form_groups:
+            words = {"pinned": "pinned by the tap", "free": "not pinned by the tap", "unknown": "not measured in the tap"}
+            said = []
+            for g in GROUPS:
+                modes = [f"f{i + 1}" for i, x in enumerate(self.model_form_groups) if x == g]
+                if modes:
+                    said.append(f"{', '.join(modes)} {words[g]}")
+            evidence = " (" + "; ".join(said) + ")"
         return (f"Each ± holds the true frequency in about {100 * self.coverage:.0f} of 100 such predictions:{where} "
-                f"{rel.min():.1f}–{rel.max():.1f} % of the frequency, mostly from {main}.")
+                f"{rel.min():.1f}–{rel.max():.1f} % of the frequency, mostly from {main}{evidence}.")
 
 
 def second_tap_advice(predictions) -> str | None:
@@ -222,13 +253,82 @@ def delta_stickout_mm(assembly, identified) -> float | None:
     return float(min(abs(assembly.stickout - a.stickout) for a in same) * 1e3)
 
 
-def model_form_term(bending_hz, delta_mm: float | None, coefficients=MODEL_FORM) -> np.ndarray:
-    """``c_mode × f × (1 + Δ/DELTA_REF_MM)`` [Hz] per mode."""
+def identified_spread(set_hz) -> np.ndarray:
+    """Relative spread of the near-optimal sets' predictions per mode [–].
+
+    ``set_hz``: array (sets, modes) [Hz], the best set first. The largest deviation of
+    any set from the best, relative to the best (0 for a single set).
+    """
+    f = np.atleast_2d(np.asarray(set_hz, dtype=float))
+    return np.abs(f - f[0]).max(axis=0) / f[0]
+
+
+def evidence_groups(set_hz, measured=None) -> tuple[str, ...]:
+    """Evidence group of each mode of a prediction: ``pinned``, ``free`` or ``unknown``.
+
+    Parameters
+    ----------
+    set_hz : array_like, shape (sets, modes)
+        The near-optimal sets' predicted frequencies [Hz], the best set first.
+    measured : sequence of bool, optional
+        Whether each mode was measured in the tap(s) the sets come from (None: not known,
+        the spread alone decides).
+
+    Returns
+    -------
+    tuple of str
+        ``unknown`` when the mode was not measured or there is a single set; else
+        ``pinned`` when the sets agree within :data:`PINNED_SPREAD`, else ``free``.
+    """
+    f = np.atleast_2d(np.asarray(set_hz, dtype=float))
+    spread = identified_spread(f)
+    out = []
+    for n, s in enumerate(spread):
+        if f.shape[0] < 2 or (measured is not None and n < len(measured) and not measured[n]):
+            out.append("unknown")
+        else:
+            out.append("pinned" if s <= PINNED_SPREAD else "free")
+    return tuple(out)
+
+
+def coefficients_for(model_form, groups, n_modes: int) -> np.ndarray:
+    """Model-form coefficient per mode [–] from ``model_form``.
+
+    ``model_form``: a dict ``{group: c}`` (``c`` a number, or one per mode) looked up with
+    ``groups``, or the older sequence of one coefficient per mode (the last repeats).
+    """
+    if isinstance(model_form, dict):
+        groups = tuple(groups) if groups else ("unknown",) * n_modes
+        out = []
+        for n in range(n_modes):
+            c = model_form[groups[n] if n < len(groups) else "unknown"]
+            c = np.atleast_1d(np.asarray(c, dtype=float))
+            out.append(c[min(n, c.size - 1)])
+        return np.asarray(out, dtype=float)
+    c = np.atleast_1d(np.asarray(model_form, dtype=float))
+    return np.concatenate([c, np.full(max(n_modes - c.size, 0), c[-1])])[:n_modes]
+
+
+def model_form_term(bending_hz, delta_mm: float | None, coefficients=MODEL_FORM, groups=None) -> np.ndarray:
+    """``c × f × (1 + Δ/DELTA_REF_MM)`` [Hz] per mode (``coefficients`` as in
+    :func:`coefficients_for`; ``groups`` the modes' evidence groups)."""
     f = np.asarray(bending_hz, dtype=float)
     d = DELTA_UNKNOWN_MM if delta_mm is None else delta_mm
-    c = np.asarray(coefficients, dtype=float)
-    c = np.concatenate([c, np.full(max(f.size - c.size, 0), c[-1])])[: f.size]
-    return c * f * (1 + d / DELTA_REF_MM)
+    return coefficients_for(coefficients, groups, f.size) * f * (1 + d / DELTA_REF_MM)
+
+
+def conformal_quantile(scores, level: float = COVERAGE) -> float:
+    """The split-conformal quantile of calibration ``scores``: the ⌈level (n + 1)⌉-th smallest.
+
+    A new score exchangeable with the n calibration scores is ≤ it with probability
+    ≥ ``level``. With too few scores (⌈level (n + 1)⌉ > n) the largest is returned and the
+    guarantee does not hold; 0 for no scores.
+    """
+    s = np.sort(np.asarray(scores, dtype=float))
+    if s.size == 0:
+        return 0.0
+    k = min(math.ceil(level * (s.size + 1)), s.size)
+    return float(s[k - 1])
 
 
 def compose(set_hz, geometry_hz, model_form_hz) -> np.ndarray:

@@ -286,7 +286,7 @@ def identify(
 
 def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3,
             relative_floor: float = 5e-4, *, identified: Sequence | None = None, tolerances=None,
-            model_form=None) -> Prediction:
+            model_form=None, measured_modes=None) -> Prediction:
     """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
 
     The first set is the best fit and gives the values. The ± half-width
@@ -303,9 +303,11 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         term's Δ and the identification side of the geometry term; unknown: Δ = 20 mm).
     tolerances : Tolerances, optional
         Default: ``assembly.tolerances`` (the assembly file's keys, or their defaults).
-    model_form : sequence of float, optional
-        Model-form coefficients per mode (default :data:`bands.MODEL_FORM`; zeros give
-        the parameter and geometry band alone).
+    model_form : dict or sequence of float, optional
+        Model-form coefficients per evidence group, or per mode (default
+        :data:`bands.MODEL_FORM`; zeros give the parameter and geometry band alone).
+    measured_modes : sequence of bool, optional
+        Which modes the tap(s) measured (sets the evidence groups, :func:`bands.evidence_groups`).
     """
     from taptune.model import ModelOptions, build_model, solve_modes
 
@@ -324,13 +326,14 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
     set_hz = np.maximum(np.abs(f - f[0]).max(0), relative_floor * f[0])
     geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0])
     delta = bands.delta_stickout_mm(assembly, identified)
-    model_hz = bands.model_form_term(f[0], delta, bands.MODEL_FORM if model_form is None else model_form)
+    groups = bands.evidence_groups(f, measured_modes)
+    model_hz = bands.model_form_term(f[0], delta, bands.MODEL_FORM if model_form is None else model_form, groups)
     half = bands.compose(set_hz, geometry_hz, model_hz)
     band = Band(
         half_width_hz=tuple(map(float, half)), set_hz=tuple(map(float, set_hz)),
         geometry_hz=tuple(map(float, geometry_hz)), model_form_hz=tuple(map(float, model_hz)),
         geometry_parts_hz={k: tuple(map(float, v)) for k, v in parts.items()},
-        delta_stickout_mm=delta, recordings=len(identified), tolerances=tol,
+        delta_stickout_mm=delta, recordings=len(identified), tolerances=tol, model_form_groups=groups,
     )
     return Prediction(
         stickout_mm=assembly.stickout * 1e3,

@@ -8,7 +8,9 @@ import pytest
 
 from taptune.errors import InputError
 from taptune.identify import predict
-from taptune.identify.bands import DELTA_REF_MM, WIDE_BAND, compose, model_form_term, second_tap_advice
+from taptune.identify.bands import (DELTA_REF_MM, GROUPS, MODEL_FORM, PINNED_SPREAD, WIDE_BAND, coefficients_for,
+                                    compose, conformal_quantile, evidence_groups, identified_spread, model_form_term,
+                                    second_tap_advice)
 from taptune.io.assembly import Tolerances, assembly_from_toml, assembly_to_toml
 from taptune.model.params import NOMINAL
 from tests.conftest import REFERENCE_TOML
@@ -92,6 +94,7 @@ def test_band_json_text_and_second_tap_advice(reference_assembly):
     assert set(d["band"]["components_hz"]) == {"set", "geometry", "model_form"}
     assert d["band"]["coverage_target"] == 0.9 and d["band"]["recordings"] == 1
     assert d["band"]["delta_stickout_mm"] == pytest.approx(20.0)
+    assert len(d["band"]["model_form_groups"]) == 3 and set(d["band"]["model_form_groups"]) <= set(GROUPS)
     assert "90 of 100" in one.band_text()
     assert np.max(one.band.relative(one.bending_hz)) > WIDE_BAND
     assert "tap the same holder once more" in second_tap_advice([one])
@@ -99,3 +102,49 @@ def test_band_json_text_and_second_tap_advice(reference_assembly):
                   model_form=(0.008, 0.008, 0.008))
     assert two.band.delta_stickout_mm == pytest.approx(10.0)
     assert second_tap_advice([two]) is None
+
+
+def test_conformal_quantile_is_the_ceil_level_n_plus_1_th_smallest():
+    scores = np.arange(19.0, 0.0, -1.0)  # 1..19, shuffled order does not matter
+    assert conformal_quantile(scores, 0.9) == 18.0  # ⌈0.9 × 20⌉ = 18
+    assert conformal_quantile(scores, 0.5) == 10.0  # ⌈0.5 × 20⌉ = 10
+    assert conformal_quantile([3.0, 1.0, 2.0], 0.9) == 3.0  # too few for 90 %: the largest
+    assert conformal_quantile([], 0.9) == 0.0
+    # The guarantee it gives: a fresh exchangeable score is ≤ it with probability ≥ 0.9.
+    rng = np.random.default_rng(3)
+    hits = [rng.exponential() <= conformal_quantile(rng.exponential(size=49), 0.9) for _ in range(2000)]
+    assert 0.88 <= np.mean(hits) <= 0.95
+
+
+def test_evidence_groups_pinned_free_and_unknown():
+    f = np.array([[1000.0, 2000.0, 3000.0], [1001.0, 2010.0, 3000.0], [999.5, 1995.0, 3003.0]])
+    assert np.allclose(identified_spread(f), [1e-3, 5e-3, 1e-3])
+    assert evidence_groups(f) == ("pinned", "free", "pinned")
+    assert evidence_groups(f, measured=[True, True, False]) == ("pinned", "free", "unknown")
+    assert evidence_groups(f[:1]) == ("unknown",) * 3  # a single set: no near-optimal information
+    edge = np.array([[1000.0], [1000.0 * (1 + PINNED_SPREAD)]])
+    assert evidence_groups(edge) == ("pinned",)
+
+
+def test_model_form_coefficients_per_group_per_mode_or_per_mode():
+    groups = ("pinned", "free", "unknown")
+    assert np.allclose(coefficients_for({"pinned": 0.001, "free": 0.002, "unknown": 0.003}, groups, 3),
+                       [0.001, 0.002, 0.003])
+    per_mode = {"pinned": (0.001, 0.004, 0.005), "free": (0.002, 0.006, 0.007), "unknown": 0.009}
+    assert np.allclose(coefficients_for(per_mode, ("free", "pinned", "unknown"), 3), [0.002, 0.004, 0.009])
+    assert np.allclose(coefficients_for((0.001, 0.002), groups, 3), [0.001, 0.002, 0.002])  # the old form
+    assert set(MODEL_FORM) == set(GROUPS)
+    f = np.array([4000.0, 12000.0, 18000.0])
+    assert np.allclose(model_form_term(f, 0.0, per_mode, ("free", "pinned", "unknown")), [8.0, 48.0, 162.0])
+
+
+def test_prediction_band_uses_the_group_of_each_mode(reference_assembly):
+    target = reference_assembly.with_stickout(0.0635)
+    c = {"pinned": 0.001, "free": 0.01, "unknown": 0.1}
+    p = predict(SETS, target, identified=[reference_assembly], tolerances=EXACT, model_form=c,
+                measured_modes=[True, True, False])
+    groups = p.band.model_form_groups
+    assert groups[2] == "unknown"
+    expected = [c[g] * f * (1 + 10.0 / DELTA_REF_MM) for g, f in zip(groups, p.bending_hz)]
+    assert np.allclose(p.band.model_form_hz, expected)
+    assert "not measured in the tap" in p.band_text()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from benchmarks.realism.audio import audible_modes, record
-from benchmarks.realism.corpus import (KINDS, check_pairs, elsewhere, make_case, without, worn)
+from benchmarks.realism.corpus import (KINDS, case_of, check_pairs, elsewhere, make_case, without, worn)
 from taptune.model.params import HolderParams
 
 MM = 1e-3
@@ -98,3 +98,36 @@ def test_check_pairs_expect_consistent_then_differs():
     ref = pairs[0][0]
     assert all(p[0] is ref for p in pairs)
     assert isinstance(ref.holder.params, HolderParams)
+
+
+@pytest.fixture(scope="module")
+def issue_cases():
+    return [make_case("calibration", i, tier="issue") for i in range(4)]
+
+
+def test_issue_tier_is_what_issue_9_describes(issue_cases):
+    for c in issue_cases:
+        assert c.tier == "issue" and c.name.startswith("ical") and c.seed == 1_500_000 + int(c.name[4:7])
+        assert {"stickout", "profile", "diameters", "flute"} <= set(c.kinds)
+        assert c.holder.profile.kind in ("soft_front", "crowned")
+        assert 0.77 <= c.true_flute_ratio <= 0.83
+        assert all(abs(f - 1) <= 0.015 for f in c.true_od_factors)
+        assert abs(c.true_assembly.stickout - c.described.stickout) <= 0.4 * MM + 1e-12
+        d = c.described.tool.flute_diameter
+        for so in [c.described.stickout] + [q.stickout_mm * MM for q in c.queries]:
+            assert 3 * d - 1e-9 <= so <= 6 * d + 1e-9
+            assert so >= c.described.tool.flute_length  # the flutes are clear of the holder
+        if "mass" in c.kinds:
+            assert c.family.startswith("er32")
+    # Disjoint from the harsh tier of the same split and index.
+    harsh = make_case("calibration", 1)
+    assert harsh.tier == "harsh" and harsh.holder.params != issue_cases[1].holder.params
+
+
+def test_case_of_rebuilds_the_case_of_a_record(issue_cases):
+    rec = {"split": "calibration", "index": 2, "tier": "issue", "ablate": None}
+    assert case_of(rec).to_dict() == issue_cases[2].to_dict()
+    old = {"split": "validation", "index": 0}  # records from before the tiers are harsh
+    assert case_of(old).name.startswith("val000")
+    with pytest.raises(ValueError, match="unknown tier"):
+        make_case("calibration", 0, tier="mild")

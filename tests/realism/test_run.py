@@ -3,6 +3,7 @@
 import json
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from benchmarks.realism.corpus import make_case
@@ -44,3 +45,35 @@ def test_summary_counts_labels_of_audible_modes_only(records):
     audible = sum(lab["audible"] for r in records for lab in r["labels"])
     assert s["audible_modes"] == audible
     assert s["right"] + s["audible_wrong_peak"] + s["audible_missed"] == audible
+
+
+def test_write_results_trims_to_the_size_limit(records, tmp_path, capsys):
+    from benchmarks.realism.run import print_table, write_results
+
+    data = {"meta": {}, "summary": {}, "cases": json.loads(json.dumps(records))}
+    full = write_results(str(tmp_path / "full.json"), json.loads(json.dumps(data)))
+    small = write_results(str(tmp_path / "small.json"), data, limit=full - 1)
+    assert small < full
+    back = json.loads((tmp_path / "small.json").read_text())["cases"]
+    assert "truth_holder" not in back[0] and "recording" not in back[0]
+    a, b = records[0]["identification"]["param_sets"][0], back[0]["identification"]["param_sets"][0]
+    assert all(b[k] == pytest.approx(a[k], rel=1e-8) for k in a)
+    print_table(records)
+    assert records[0]["name"] in capsys.readouterr().out
+
+
+def test_calibration_is_the_conformal_quantile_per_group():
+    from benchmarks.calibrate_bands import calibrate, stats
+
+    rng = np.random.default_rng(5)
+    rows = []
+    for group, scale in (("pinned", 0.002), ("free", 0.01)):
+        for err in rng.exponential(scale, 99):
+            rows.append({"group": group, "mode": 1, "f": 1000.0, "err": 1000.0 * err, "set": 0.0, "geom": 0.0,
+                         "delta": 0.0, "measured": True})
+    c = calibrate(rows)
+    for group in ("pinned", "free"):
+        need = sorted(r["err"] / 1000.0 for r in rows if r["group"] == group)
+        assert c[group] == pytest.approx(need[89])  # ⌈0.9 × 100⌉ = 90th smallest of 99
+    s = stats(rows, c)
+    assert 0.9 <= s["coverage"] <= 0.92 and set(s["groups"]) == {"pinned", "free"}
