@@ -158,6 +158,7 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise InputError(f"{path}: cannot write the {what} ({target.parent}: {err.strerror})") from None
+    check_writable(path)  # a read-only folder: now, not after minutes of fitting
     return path
 
 
