@@ -104,6 +104,9 @@ def refuse_library_output(path: str | os.PathLike | None, what: str, library=Non
             raise InputError(f"{path}: is the holder library's lock file; choose another name for the {what}")
 
 
+# Outputs whose writer has one format whatever the name (matplotlib PNG, PdfPages PDF).
+_SUFFIXES = {"plot": (".png",), "report": (".pdf",)}
+
 # Options and arguments that name files a command reads (never to be overwritten by its outputs).
 _INPUT_ARGS = ("wav", "assembly", "params", "machine", "frf", "dummy", "aa", "ab", "bb", "bands",
                "interface_tap", "file", "spindle", "paths")
@@ -139,6 +142,10 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
     for source in inputs:
         if _same_file(Path(path), Path(source)):
             raise InputError(f"{path}: is also an input of this command; writing the {what} there would destroy it")
+    wanted = _SUFFIXES.get(what)
+    if wanted and target.suffix.lower() not in wanted:
+        # The writers do not follow the name: a plot named x.pdf or x.txt held PNG data.
+        raise InputError(f"{path}: the {what} is written as {' or '.join(wanted)}; name the file so")
     if not create:
         check_writable(path)
         return path
@@ -151,6 +158,7 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise InputError(f"{path}: cannot write the {what} ({target.parent}: {err.strerror})") from None
+    check_writable(path)  # a read-only folder: now, not after minutes of fitting
     return path
 
 

@@ -434,6 +434,11 @@ def load_machine(path) -> Machine:
     r = _Reader(str(path))
     m = r.table(data, "machine")
     s = r.table(data, "spindle")
+    for key in m:
+        # A misspelt optional key (max_rmp) would silently leave the lobes at their default top speed.
+        close = [k for k in ("name", "interface", "max_rpm") if k != key and _close(str(key), k)]
+        if close:
+            r.fail(f"[machine] {key}", f"is not a known key; did you mean {close[0]!r}?")
     name = r.text(m, "name", "[machine]")
     interface = r.text(m, "interface", "[machine]")
     max_rpm = r.number(m, "max_rpm", "[machine]") if "max_rpm" in m else None
@@ -447,6 +452,13 @@ def load_machine(path) -> Machine:
     y_name = r.text(s, "y", "[spindle]", "")
     y = read_spindle(_relative(folder, y_name)) if y_name else x
     return Machine(name, interface, x, y, str(path), y_from_x=not y_name, max_rpm=max_rpm)
+
+
+def _close(a: str, b: str) -> bool:
+    """True when ``a`` looks like a misspelling of ``b``."""
+    import difflib
+
+    return difflib.SequenceMatcher(None, a.lower(), b).ratio() >= 0.75
 
 
 def _relative(folder: Path, name: str) -> str:

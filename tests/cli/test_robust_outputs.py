@@ -279,3 +279,35 @@ def test_record_writes_flac_as_flac_and_refuses_other_names(monkeypatch, tmp_pat
     one_line_exit_2(capsys, main(["record", "--out", str(tmp_path / "taps.mp3")]), "saved as .wav or .flac")
     assert main(["record", "--out", str(tmp_path / "taps.flac"), "--taps", "1"]) == 0
     assert soundfile.info(tmp_path / "taps.flac").format == "FLAC"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["spectrum", "{wav}", "--plot", "{tmp}/fit.pdf"], "fit.pdf: the plot is written as .png; name the file so"),
+    (["predict", "{toml}", "--holder", "x", "--plot", "{tmp}/p.txt"], "p.txt: the plot is written as .png"),
+    (["identify", "{wav}", "--assembly", "{toml}", "--no-save", "--report", "{tmp}/r.png"],
+     "r.png: the report is written as .pdf"),
+    (["batch", "{wav}", "--assembly", "{toml}", "--no-save", "--report", "{tmp}/r", "--out", "{tmp}/o"],
+     "the report is written as .pdf"),
+])
+def test_a_plot_or_report_named_for_another_format_is_refused(argv, message, tap_wav, reference_toml, tmp_path, capsys):
+    # Before, --plot fit.pdf wrote PNG data into fit.pdf (and --report r.png a PDF into r.png).
+    argv = [a.format(wav=tap_wav, toml=reference_toml, tmp=tmp_path) for a in argv]
+    one_line_exit_2(capsys, main(argv + ["--library", str(tmp_path / "lib.json")] * (argv[0] != "spectrum")), message)
+    assert [p.name for p in tmp_path.iterdir()] in ([], ["reference.toml"])  # nothing written
+
+
+def test_an_output_into_a_read_only_folder_is_refused_before_the_work(monkeypatch, tap_wav, reference_toml,
+                                                                       tmp_path, capsys):
+    # os.access stands in for a read-only folder (the tests may run as root, who may write anywhere).
+    from taptune.io import atomic
+
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    real = atomic.os.access
+    monkeypatch.setattr(atomic.os, "access", lambda path, mode: False if str(path) == str(locked) else real(path, mode))
+    called = []
+    monkeypatch.setattr("taptune.cli.cmd_identify.run_identification", lambda *a, **k: called.append(1))
+    code = main(["identify", str(tap_wav), "--assembly", str(reference_toml), "--no-save",
+                 "--json", str(locked / "fit.json")])
+    one_line_exit_2(capsys, code, "fit.json: cannot be written (no permission to write into")
+    assert not called

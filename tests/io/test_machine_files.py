@@ -124,6 +124,9 @@ def test_machine_relative_paths_and_y_defaults_to_x(tmp_path):
     (MACHINE + 'z = "sx.csv"\n', r"\[spindle\] z is not a direction"),
     (MACHINE.replace("[spindle]", "max_rpm = -5\n[spindle]"), r"\[machine\] max_rpm must be > 0, got -5"),
     (MACHINE.replace("[spindle]", "max_rpm = 'fast'\n[spindle]"), r"\[machine\] max_rpm must be a number"),
+    # Before, a misspelt max_rpm was ignored and the lobes kept their default top speed.
+    (MACHINE.replace("[spindle]", "max_rmp = 12000\n[spindle]"),
+     r"\[machine\] max_rmp is not a known key; did you mean 'max_rpm'\?"),
 ])
 def test_machine_bad_toml(tmp_path, text, message):
     write_spindle_csv(tmp_path / "sx.csv", spindle())
