@@ -260,9 +260,9 @@ def main(argv=None) -> int:
     if args.variants:
         variants(cal, val)
     if args.write:
-        names = sorted({Path(p).name for p in args.records})
+        tiers = " + ".join(sorted({r["tier"] for r in cal}))
         n_cases = len({r["case"] for r in cal})
-        note = (f"realism corpus ({', '.join(names)}: {n_cases} holders, {len(cal)} predictions), "
+        note = (f"realism corpus, {tiers} tiers: {n_cases} holders, {len(cal)} predictions; "
                 f"Mondrian split-conformal 90 % per evidence group")
         write_constants(c, delta_ref, note)
     return 0
