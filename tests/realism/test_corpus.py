@@ -131,3 +131,22 @@ def test_case_of_rebuilds_the_case_of_a_record(issue_cases):
     assert case_of(old).name.startswith("val000")
     with pytest.raises(ValueError, match="unknown tier"):
         make_case("calibration", 0, tier="mild")
+
+
+def test_harsh_tier_is_still_the_corpus_of_the_stored_baselines():
+    # The stored identifications (benchmarks/realism/baseline_*.json) predate the tiers:
+    # their cases must come out of make_case unchanged.
+    import json
+
+    from tests.conftest import REPO
+
+    stored = json.loads((REPO / "benchmarks" / "realism" / "baseline_calibration.json").read_text())["cases"][:2]
+    for rec in stored:
+        case = case_of(rec)
+        assert case.tier == "harsh" and case.name == rec["name"] and list(case.kinds) == rec["kinds"]
+        # (the stored JSON rounds the frequencies to 0.01 Hz)
+        assert case.truth.bending_hz == pytest.approx(rec["truth"]["bending_hz"], abs=0.006)
+        for q, stored_q in zip(case.queries, rec["queries"], strict=True):
+            assert q.stickout_mm == stored_q["stickout_mm"]
+            assert q.true_stickout_mm == pytest.approx(stored_q["true_stickout_mm"], abs=1e-4)
+            assert q.truth.bending_hz == pytest.approx(stored_q["bending_hz"], abs=0.006)
