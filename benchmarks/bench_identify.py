@@ -11,7 +11,10 @@ set's spread). The load average is printed with the wall times: the machine may 
 With ``--app`` it times instead, in the offscreen app, the click on Identify to the fitted
 view: with one process, then with the app's warm process pool.
 
-Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile] [--app]``.
+With ``--split`` the analysis (model-guided labels, which build the reduced evaluator)
+and the fit (search, near-optimal set, full-model check) are timed apart.
+
+Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile] [--app] [--split]``.
 """
 
 from __future__ import annotations
@@ -32,7 +35,9 @@ sys.path.insert(0, str(REPO))
 import numpy as np  # noqa: E402
 
 from taptune.identify import IdentifyOptions, predict  # noqa: E402
-from taptune.identify.pipeline import identify_recordings  # noqa: E402
+from taptune.identify import identify  # noqa: E402
+from taptune.identify.pipeline import analyse_for_assembly, identify_recordings  # noqa: E402
+from taptune.model.reduced import cached_evaluator  # noqa: E402
 from taptune.io.assembly import load_assembly  # noqa: E402
 from taptune.io.audio import read_audio  # noqa: E402
 
@@ -111,6 +116,8 @@ def main() -> None:
     ap.add_argument("--profile", action="store_true", help="cProfile the identifications (use with --jobs 1)")
     ap.add_argument("--app", action="store_true", help="time click-to-fitted-view in the offscreen app instead")
     ap.add_argument("--cases", type=int, default=None, help="only the first N cases")
+    ap.add_argument("--split", action="store_true",
+                    help="time the analysis (labels, evaluator build) and the fit apart")
     args = ap.parse_args()
     if args.app:
         app_figures(args.cases)
@@ -123,16 +130,26 @@ def main() -> None:
     print(f"load average at start: {os.getloadavg()[0]:.2f} (cores: {os.cpu_count()})")
     print(f"{'case':16s} {'evals':>6s} {'wall [s]':>8s} {'CPU [s]':>7s} {'fit err [%]':>11s} "
           f"{'pred err [%] f1 f2 f3 per stick-out':>40s} {'inside':>6s} {'± [%]':>6s}")
-    walls, cpus, errors, inside, widths = [], [], [], [], []
+    walls, cpus, errors, inside, widths, splits = [], [], [], [], [], []
     for name, wav, toml, other in itertools.islice(cases(), args.cases):
         asm = load_assembly(toml)
         rec = read_audio(wav)
-        times, cpu = [], []
+        times, cpu, split = [], [], []
+        if args.split:
+            cached_evaluator.cache_clear()  # each case builds its evaluator, as a fresh CLI run does
         for _ in range(args.repeat):
             t0, c0 = time.perf_counter(), cpu_seconds()
             if profiler:
                 profiler.enable()
-            analyses, result = identify_recordings([rec], [asm], IdentifyOptions(seed=args.seed, jobs=args.jobs))
+            options = IdentifyOptions(seed=args.seed, jobs=args.jobs)
+            if args.split:
+                # The same steps as identify_recordings, timed apart.
+                analysis = analyse_for_assembly(rec, asm, None, options.model)
+                t1, c1 = time.perf_counter(), cpu_seconds()
+                result = identify([analysis], [asm], options)
+                split.append((t1 - t0, c1 - c0, time.perf_counter() - t1, cpu_seconds() - c1))
+            else:
+                analyses, result = identify_recordings([rec], [asm], options)
             if profiler:
                 profiler.disable()
             times.append(time.perf_counter() - t0)
@@ -154,7 +171,15 @@ def main() -> None:
         widths.extend(case_width)
         print(f"{name:16s} {result.evaluations:6d} {walls[-1]:8.2f} {cpus[-1]:7.2f} {fit_err:11.3f} "
               f"{' | '.join(texts):>40s} {np.mean(case_inside):6.0%} {np.mean(case_width):6.3f}", flush=True)
+        if split:
+            best = min(split, key=lambda x: x[0] + x[2])
+            splits.append(best)
+            print(f"{'':16s} analysis (labels, evaluator build) {best[0]:.2f} s wall, {best[1]:.2f} s CPU; "
+                  f"fit (search, set, full-model check) {best[2]:.2f} s wall, {best[3]:.2f} s CPU")
     errors = np.array(errors)
+    if splits:
+        a = np.median(np.array(splits), axis=0)
+        print(f"\nmedian analysis {a[0]:.2f} s wall / {a[1]:.2f} s CPU, fit {a[2]:.2f} s wall / {a[3]:.2f} s CPU")
     print(f"\nidentification wall time: median {np.median(walls):.2f} s, max {max(walls):.2f} s "
           f"(jobs={args.jobs or 'all cores'}; load average now {os.getloadavg()[0]:.2f}); "
           f"CPU time: median {np.median(cpus):.2f} s, max {max(cpus):.2f} s")

@@ -24,14 +24,14 @@ class GAOptions:
     """Settings of the genetic algorithm (MODEL.md §8.5 ranges)."""
 
     population: int = 48
-    generations: int = 20
+    generations: int = 30
     crossover_probability: float = 0.9
     crossover_eta: float = 10.0  # SBX distribution index: larger = children nearer parents
     mutation_eta: float = 20.0  # polynomial mutation distribution index
     mutation_probability: float | None = None  # per gene; None = 1/d
     tournament: int = 2
     elite: int = 2
-    patience: int = 8  # stop after this many generations without improvement …
+    patience: int = 10  # stop after this many generations without improvement …
     tolerance: float = 1e-3  # … by more than tolerance × best + tolerance_abs
     # J counts tolerances squared (MODEL.md §8.4): gains below 0.005 change no prediction.
     tolerance_abs: float = 5e-3
