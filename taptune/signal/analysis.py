@@ -69,6 +69,9 @@ class SpectrumOptions:
     faint_tap_fraction: float = 0.5
     #: ... and resonance-shaped: F ratio of a one-mode fit over a flat floor.
     faint_f_ratio: float = 8.0
+    #: Prominence of a faint candidate: noise ripple splits the top of a peak only 8 dB
+    #: high by dips of a few dB (the maxima of one peak are then merged).
+    faint_prominence_db: float = 3.0
     #: Flank width of the local floor [Hz].
     faint_ring_hz: float = 250.0
     faint_search: bool = True
@@ -337,7 +340,7 @@ def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz
     search = [(lo, min(hi, fmax)) for lo, hi in search if lo < fmax]
     cands = pick_faint_peaks(freq, r["mag"], r["tap_mag"], search, noise_mag=r["noise_mag"],
                              min_db=o.faint_min_db, tap_db=o.faint_tap_db, f_ratio=o.faint_f_ratio,
-                             prominence_db=o.prominence_db, tap_fraction=o.faint_tap_fraction,
+                             prominence_db=o.faint_prominence_db, tap_fraction=o.faint_tap_fraction,
                              ring_hz=o.faint_ring_hz, stationary_margin_db=o.stationary_margin_db,
                              oversample=r["oversample"])
     scatter = tap_scatter(freq, r["tap_mag"], [c["idx"] for c in cands])

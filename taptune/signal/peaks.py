@@ -759,7 +759,7 @@ def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0
 
 
 def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: float = 8.0,
-                     tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 6.0,
+                     tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 3.0,
                      ring_hz: float = 250.0, stationary_margin_db: float = 6.0,
                      oversample: float = 1.0, per_window: int = 2, min_width_rel: float = 1e-3,
                      tap_fraction: float = 0.5):
@@ -842,10 +842,10 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
                          "prominence_db": float(prom), "f_ratio": ratio, "width_hz": float(hw)})
         keep.sort(key=lambda c: -c["over_db"])
         # Noise splits the top of a faint resonance into several maxima: the highest stands
-        # for the others within two of its half-power widths on either side.
+        # for the others within two of its half-power widths (measured or fitted) either side.
         chosen = []
         for c in keep:
-            if all(abs(c["hz"] - q["hz"]) > 2 * q["width_hz"] for q in chosen):
+            if all(abs(c["hz"] - q["hz"]) > 2 * max(q["width_hz"], q["zeta"] * q["hz"]) for q in chosen):
                 chosen.append(c)
         for c in chosen[:per_window]:
             found[c["idx"]] = c
