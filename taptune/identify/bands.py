@@ -265,6 +265,17 @@ def identified_spread(set_hz) -> np.ndarray:
     return np.abs(f - f[0]).max(axis=0) / f[0]
 
 
+def measured_modes(measured_hz, n_modes: int = 3) -> tuple[bool, ...]:
+    """Which modes any of the recordings measured.
+
+    Parameters
+    ----------
+    measured_hz : sequence of sequence of float or None
+        Per recording, the measured bending frequencies [Hz] (None: mode not measured).
+    """
+    return tuple(any(n < len(m) and m[n] is not None for m in measured_hz) for n in range(n_modes))
+
+
 def evidence_groups(set_hz, measured=None) -> tuple[str, ...]:
     """Evidence group of each mode of a prediction: ``pinned``, ``free`` or ``unknown``.
 
@@ -279,14 +290,17 @@ def evidence_groups(set_hz, measured=None) -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        ``unknown`` when the mode was not measured or there is a single set; else
-        ``pinned`` when the sets agree within :data:`PINNED_SPREAD`, else ``free``.
+        ``free`` when there is a single set (nothing shows the tap pinned the mode, and no
+        spread stands in for the model-form term); else ``unknown`` when the mode was not
+        measured, ``pinned`` when the sets agree within :data:`PINNED_SPREAD`, else ``free``.
     """
     f = np.atleast_2d(np.asarray(set_hz, dtype=float))
     spread = identified_spread(f)
     out = []
     for n, s in enumerate(spread):
-        if f.shape[0] < 2 or (measured is not None and n < len(measured) and not measured[n]):
+        if f.shape[0] < 2:
+            out.append("free")
+        elif measured is not None and n < len(measured) and not measured[n]:
             out.append("unknown")
         else:
             out.append("pinned" if s <= PINNED_SPREAD else "free")

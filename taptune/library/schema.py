@@ -686,9 +686,12 @@ class HolderEntry:
         Prediction; ``bending_hz_spread`` is the band's half-width, ``band`` its make-up):
         the one way the CLI, the library commands and the GUI predict from the library."""
         from taptune.identify import predict
+        from taptune.identify.bands import measured_modes
 
+        measured = [r.bending_measured_hz for r in self.identifications]
         return predict(self.prediction_sets(), assembly, self.options(), relative_floor=self.relative_floor(),
-                       identified=self.identified_assemblies())
+                       identified=self.identified_assemblies(),
+                       measured_modes=measured_modes(measured) if measured else None)
 
     def spread(self) -> dict[str, float]:
         """± half-width of each parameter over the best and the near-optimal sets (library units)."""

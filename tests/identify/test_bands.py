@@ -121,7 +121,18 @@ def test_evidence_groups_pinned_free_and_unknown():
     assert np.allclose(identified_spread(f), [1e-3, 5e-3, 1e-3])
     assert evidence_groups(f) == ("pinned", "free", "pinned")
     assert evidence_groups(f, measured=[True, True, False]) == ("pinned", "free", "unknown")
-    assert evidence_groups(f[:1]) == ("unknown",) * 3  # a single set: no near-optimal information
+    # A single set: nothing shows the tap pinned a mode, and there is no spread to stand in
+    # for the model-form term: the widest group, whatever was measured.
+    assert evidence_groups(f[:1]) == ("free",) * 3
+    assert evidence_groups(f[:1], measured=[True, False, False]) == ("free",) * 3
+
+
+def test_measured_modes_any_recording():
+    from taptune.identify.bands import measured_modes
+
+    assert measured_modes([[4000.0, None, 19000.0]]) == (True, False, True)
+    assert measured_modes([[4000.0, None, None], [3000.0, 12000.0, None]]) == (True, True, False)
+    assert measured_modes([[4000.0]]) == (True, False, False)
     edge = np.array([[1000.0], [1000.0 * (1 + PINNED_SPREAD)]])
     assert evidence_groups(edge) == ("pinned",)
 
