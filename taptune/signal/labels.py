@@ -76,10 +76,15 @@ def load_band_table(path) -> dict[str, Bands]:
         data = data["interfaces"]
     if not isinstance(data, dict):
         raise InputError(f"{path}: a band table maps interface names to [[lo_hz, hi_hz], ...]")
+    if not data:
+        raise InputError(f"{path}: the band table names no interface")
     table = {}
     for name, entry in data.items():
         if isinstance(entry, dict):
-            entry = entry.get("local_hz", [])
+            if "local_hz" not in entry:
+                # e.g. an assembly file given by mistake: its [holder] table has no bands.
+                raise InputError(f"{path}: interface {name!r} has no local_hz bands (is this a band table?)")
+            entry = entry["local_hz"]
         try:
             bands = tuple((float(lo), float(hi)) for lo, hi in entry)
         except (TypeError, ValueError):

@@ -40,7 +40,10 @@ def test_user_tables_toml_json_and_environment(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("text,fragment", [("x = [[1, 2, 3]]", "bands must be"), ("x = [[5, 1]]", "0 < lo < hi"),
-                                           ("not toml [", "not a valid band table")])
+                                           ("not toml [", "not a valid band table"), ("", "names no interface"),
+                                           # an assembly file given by mistake
+                                           ('[holder]\nname = "ER32"\n[setup]\nstickout = 50.0\n',
+                                            "'holder' has no local_hz")])
 def test_bad_band_table_names_the_file(tmp_path, text, fragment):
     p = tmp_path / "bad.toml"
     p.write_text(text)
