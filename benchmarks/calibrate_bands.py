@@ -14,24 +14,29 @@ these at level ⌈0.9 (n_g + 1)⌉ / n_g: each group is covered ≥ 90 % on exch
 ``--validate`` measures coverage and half-width on other records (never used to calibrate)
 with the coefficients just calibrated and with those in bands.py.
 
-The whole loop, on the code of the working tree. Measured 2026-11-25 on the 2-core
-machine shared with other jobs (load 7–10): each ``run`` of 24 cases 4–6 min wall
-(≈ 2 CPU-min), the calibration 3–6 min wall without ``--cache`` (it re-predicts every
-query of every file with finite-difference geometry sensitivities), seconds with it::
+The whole loop, on the code of the working tree. Measured 2026-11-25 on the idle 2-core
+machine: each ``run`` of 24 cases ≈ 1 min wall (≈ 1.4 CPU-min), the calibration ≈ 3.5 min
+without ``--cache`` (it re-predicts every query of every file with finite-difference
+geometry sensitivities), seconds with it. Calibration: 72 holders per tier (three files
+of 24 each, under the 200 kB limit); validation: 48 per tier::
 
     export PYTHONPATH=$PWD OPENBLAS_NUM_THREADS=1
     R=benchmarks/realism
-    for split in calibration validation; do
-      for tier in issue harsh; do
-        nice -n 5 python -m benchmarks.realism.run --tier $tier --split $split --n 24 --jobs 2 \
-            --out $R/results_${tier}_$split.json
+    for tier in issue harsh; do
+      for start in 0 24 48; do
+        s=$([ $start = 0 ] && echo "" || echo "_$start")
+        python -m benchmarks.realism.run --tier $tier --split calibration --start $start --n 24 --jobs 2 \
+            --out $R/results_${tier}_calibration$s.json
+      done
+      for start in 0 24; do
+        s=$([ $start = 0 ] && echo "" || echo "_$start")
+        python -m benchmarks.realism.run --tier $tier --split validation --start $start --n 24 --jobs 2 \
+            --out $R/results_${tier}_validation$s.json
       done
     done
-    nice -n 5 python -m benchmarks.realism.run --split infamily --n 12 --jobs 2 \
-        --out /tmp/results_infamily.json          # optional; else use $R/baseline_infamily.json
-    python benchmarks/calibrate_bands.py \
-        --records $R/results_issue_calibration.json $R/results_harsh_calibration.json \
-        --validate $R/results_issue_validation.json $R/results_harsh_validation.json /tmp/results_infamily.json \
+    python -m benchmarks.realism.run --split infamily --n 12 --jobs 2 --out $R/results_infamily.json
+    python benchmarks/calibrate_bands.py --records $R/results_*_calibration*.json \
+        --validate $R/results_issue_validation*.json $R/results_harsh_validation*.json $R/results_infamily.json \
         --cache /tmp/taptune-band-rows.json --write [--variants]
     python -m pytest tests/identify/test_bands.py tests/realism
 

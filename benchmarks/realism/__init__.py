@@ -46,8 +46,9 @@ band methods can be re-evaluated offline with ``summarise``)::
     python -m benchmarks.realism.attribute --split validation --n 24   # truth-only, per deviation
 
 Baselines (taptune 0c95237, before issue 9): ``benchmarks/realism/baseline_<split>.json``
-for ``validation`` (24), ``calibration`` (24) and ``infamily`` (12). Issue tier (taptune
-main f1b05df, before the issue-9 band work): ``results_issue_<split>.json`` for
-``calibration`` and ``validation`` (24 each); the bands are calibrated on them with
+for ``validation`` (24), ``calibration`` (24) and ``infamily`` (12). Issue tier before the
+issue-9 work (taptune main f1b05df): ``before_issue_<split>.json`` (24 each). The code of
+today: ``results_<tier>_<split>[_<start>].json`` (calibration 72 holders per tier,
+validation 48, in-family 12); the bands are calibrated on them with
 ``benchmarks/calibrate_bands.py`` (its docstring has the whole loop).
 """

@@ -42,6 +42,7 @@ from taptune.gui.recorder_panel import RecorderPanel
 from taptune.gui.signals import emit
 from taptune.gui.spectrum_view import SpectrumView, relabel
 from taptune.gui.workers import TaskRunner
+from taptune.identify.bands import measured_modes
 from taptune.io.audio import AUDIO_SUFFIXES
 
 # The open dialogs' filter: every format read_audio reads, in both cases.
@@ -608,7 +609,8 @@ class MainWindow(QMainWindow):
             self.banner.show_text(advice)
         self.set_holder_source(PredictorSource(f"identified now ({assembly.holder.name})",
                                                tuple(result.param_sets), assembly, self.identify_options.model,
-                                               result.relative_floor, tuple(assemblies)))
+                                               result.relative_floor, tuple(assemblies),
+                                               measured_modes(result.bending_measured_hz)))
         self.show_view("fit")
         self.statusBar().showMessage(
             f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
@@ -715,7 +717,8 @@ class MainWindow(QMainWindow):
             return
         sets = tuple(entry.prediction_sets())
         self.set_holder_source(PredictorSource(f"library ({entry.name})", sets, assembly, options,
-                                               entry.relative_floor(), tuple(entry.identified_assemblies())))
+                                               entry.relative_floor(), tuple(entry.identified_assemblies()),
+                                               entry.measured_modes()))
         if self.tabs.currentWidget() is not self.machine:
             self.show_view("predict")
 

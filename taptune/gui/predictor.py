@@ -39,6 +39,7 @@ class PredictorSource:
     model_options: object = None
     relative_floor: float = 5e-4  # see identify.predict
     identified: tuple = ()  # the assemblies the holder was identified on (the band's Δ stick-out)
+    measured_modes: tuple | None = None  # which modes the taps measured (the band's evidence groups)
 
 
 def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ_HZ):
@@ -49,7 +50,7 @@ def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ
     options = source.model_options or ModelOptions()
     assembly = source.assembly.with_stickout(stickout_mm * MM)
     prediction = predict(source.param_sets, assembly, options, relative_floor=source.relative_floor,
-                         identified=list(source.identified))
+                         identified=list(source.identified), measured_modes=source.measured_modes)
     h = tip_receptance(build_model(assembly, options), source.param_sets[0], freq_hz)
     return stickout_mm, prediction, np.asarray(h)
 

@@ -686,12 +686,17 @@ class HolderEntry:
         Prediction; ``bending_hz_spread`` is the band's half-width, ``band`` its make-up):
         the one way the CLI, the library commands and the GUI predict from the library."""
         from taptune.identify import predict
+
+        return predict(self.prediction_sets(), assembly, self.options(), relative_floor=self.relative_floor(),
+                       identified=self.identified_assemblies(), measured_modes=self.measured_modes())
+
+    def measured_modes(self) -> tuple[bool, ...] | None:
+        """Which bending modes any identification measured (the band's evidence groups);
+        None without identification records."""
         from taptune.identify.bands import measured_modes
 
         measured = [r.bending_measured_hz for r in self.identifications]
-        return predict(self.prediction_sets(), assembly, self.options(), relative_floor=self.relative_floor(),
-                       identified=self.identified_assemblies(),
-                       measured_modes=measured_modes(measured) if measured else None)
+        return measured_modes(measured) if measured else None
 
     def spread(self) -> dict[str, float]:
         """± half-width of each parameter over the best and the near-optimal sets (library units)."""

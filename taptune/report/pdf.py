@@ -92,7 +92,7 @@ def report_stickouts_mm(stickout_mm: float) -> list[float]:
 
 
 def predict_rows(param_sets, assembly, model_options=None, relative_floor: float = 5e-4,
-                 identified=None) -> tuple[PredictionRow, ...]:
+                 identified=None, measured_modes=None) -> tuple[PredictionRow, ...]:
     """Predictions at :func:`report_stickouts_mm`; an impossible stick-out gets a note, not an error.
 
     ``identified`` are the assemblies the parameters were identified on (default
@@ -105,7 +105,7 @@ def predict_rows(param_sets, assembly, model_options=None, relative_floor: float
     for s in report_stickouts_mm(assembly.stickout * 1e3):
         try:
             p = predict(param_sets, assembly.with_stickout(s * 1e-3), model_options, relative_floor=relative_floor,
-                        identified=identified)
+                        identified=identified, measured_modes=measured_modes)
         except InputError:
             rows.append(PredictionRow(s, note="geometry not possible"))
             continue
@@ -145,6 +145,7 @@ def report_pages(result, analyses, recordings, assemblies, model_options=None, s
     ``sha256s``: the recordings' hashes where the caller has them already (batch hashes
     every file while planning); otherwise each file is hashed here.
     """
+    from taptune.identify.bands import measured_modes
     from taptune.library.schema import utc_now
 
     date = utc_now()
@@ -161,7 +162,8 @@ def report_pages(result, analyses, recordings, assemblies, model_options=None, s
             date=date,
             result=recording_view(result, k),
             analysis=analysis,
-            predictions=predict_rows(result.param_sets, asm, model_options, result.relative_floor, assemblies),
+            predictions=predict_rows(result.param_sets, asm, model_options, result.relative_floor, assemblies,
+                                     measured_modes(result.bending_measured_hz)),
             joint_files=files if joint else (),
             joint_objective=result.objective if joint else None,
         ))
