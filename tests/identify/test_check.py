@@ -92,6 +92,18 @@ def test_bands_wider_than_the_wear_shift_cannot_say_consistent():
     assert r.verdict == "inconclusive" and "worn" in r.reasons[-1]
 
 
+def test_a_wear_shift_inside_the_band_cannot_say_consistent():
+    # Only f1 measured, band ±100 Hz (s = 60.8 Hz), wear moves it 80 Hz: a tap at +30 Hz is
+    # 110 Hz from the worn prediction (more than 1.645 s), but the model's own error moves the
+    # good and the worn prediction alike, so a worn holder could have rung there.
+    r = _check((3030.0, None, None), bands=(100.0, 30.0, 60.0), worn=(2920.0, 9800.0, 15900.0))
+    assert [m.status for m in r.modes] == ["inside", "not measured", "not measured"]
+    assert r.verdict == "inconclusive" and "worn" in r.reasons[-1]
+    # The same tap with a wear shift beyond the band rules the worn holder out.
+    assert _check((3030.0, None, None), bands=(100.0, 30.0, 60.0), worn=(2800.0, 9800.0, 15900.0)).verdict \
+        == "consistent"
+
+
 def test_modes_at_the_edge_of_the_recording_bandwidth_are_not_used():
     # An AAC low-pass at 16 kHz: the 16 kHz mode is not used, whatever its value.
     r = _check((3004.0, 9980.0, 15000.0), bandwidth_hz=16000.0)
