@@ -415,7 +415,8 @@ class _Solver:
         count, n, b = len(P), self.n, starts.shape[2]
         A = (_coefficients_many(P) @ self.a_flat).reshape(count, n, n)
         df = P[:, 5]
-        M = self.m_tool + df[:, None, None] * self.m_holder
+        # M(p) is real: applied to a complex block viewed as real numbers, 3× faster.
+        M = self.model.m_tool + df[:, None, None] * self.model.m_holder
         g00, g01, _, g11 = np.array(self.g_tool)[:, None] + np.array(self.g_holder)[:, None] * df
         det = g00 * g11 - g01 * g01
         gram_inv = np.stack([np.stack([g11, -g01], axis=-1), np.stack([-g01, g00], axis=-1)], axis=-2) / det[:, None, None]
@@ -431,11 +432,11 @@ class _Solver:
                 raise np.linalg.LinAlgError("K̃ − σM is singular for a candidate of the batch")
             factors.append((lu, piv))
         tip = np.broadcast_to(self.tip[None, :, None], (count, n, 1))
-        y = _lu_solve(factors, np.concatenate([M @ starts, tip], axis=2))
-        X, static = y[..., :b], y[..., b]
+        y = _lu_solve(factors, np.concatenate([_real_times(M, starts), tip], axis=2))
+        X, static = np.ascontiguousarray(y[..., :b]), y[..., b]
         X -= R @ (projT @ X)
         for _ in range(1, opt.min_iterations):
-            X = _lu_solve(factors, M @ X)
+            X = _lu_solve(factors, _real_times(M, X))
             X -= R @ (projT @ X)
         lam_out = np.zeros((count, b), dtype=complex)
         tip_out = np.zeros((count, b), dtype=complex)
@@ -444,7 +445,7 @@ class _Solver:
         iterations = opt.min_iterations
         while True:
             X, _ = np.linalg.qr(X)
-            MX = M @ X
+            MX = _real_times(M, X)
             Y = _lu_solve(factors, MX)
             Xt = X.transpose(0, 2, 1)
             mr = Xt @ MX
@@ -488,6 +489,11 @@ class _Solver:
         return lam, vec, np.eye(len(lam), dtype=complex)
 
 
+def _real_times(M: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """M @ X for real stacked M (B, n, n) and complex X (B, n, k), by real products."""
+    return (M @ np.ascontiguousarray(X).view(float)).view(complex)
+
+
 def _lu_solve(factors, rhs: np.ndarray) -> np.ndarray:
     """(K̃ − σM)⁻¹ rhs per candidate, from the LU factors of each: rhs (B, n, k)."""
     out = np.empty_like(rhs)
@@ -529,6 +535,10 @@ def training_points(n_lhs: int, seed: int) -> np.ndarray:
 # Distances for the nearest training point weight the parameters by how much they move
 # the mode shapes: the two stiffness intensities most, the factors least.
 _SHAPE_WEIGHTS = np.array([1.0, 1.0, 0.5, 0.5, 0.3, 0.1, 0.1])
+
+
+# Candidates solved together by FastEvaluator.evaluate_many (measured: 16–24 beat 8 and 48).
+_CHUNK = 24
 
 
 class FastEvaluator:
@@ -635,9 +645,11 @@ class FastEvaluator:
         w2 = (TWO_PI * np.asarray(window_hz, dtype=float)) ** 2
         starts = self._starts[np.argmin(self._key_offset - P @ self._key_matrix.T, axis=1)]
         try:
-            lam, tip_modal, rigid_tip, residual, iterations = self._solver.solve_many(P, starts)
+            # Chunks whose LU factors stay in cache (48 candidates' no longer do).
+            parts = [self._solver.solve_many(P[k : k + _CHUNK], starts[k : k + _CHUNK]) for k in range(0, len(P), _CHUNK)]
         except np.linalg.LinAlgError:
             return self._evaluate_each(P, window_hz)
+        lam, tip_modal, rigid_tip, residual, iterations = (np.concatenate(x) for x in zip(*parts))
         lam[iterations < 0] = 1.0  # placeholders of the candidates solved one at a time below
         h = (
             rigid_tip[:, None] / (-w2)
