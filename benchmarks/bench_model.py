@@ -7,6 +7,8 @@ On the reference assembly (assets/er32_hsk63_d16.toml, MODEL.md §13.4) prints:
 * ``N evaluations/s`` of what the optimiser needs per candidate (f1–f3, ζ1–ζ3 and the
   tip receptance on a 201-point, 1 Hz window), one call per candidate, over random
   points of the search space (wall clock, and per CPU-second);
+* the same through ``evaluate_many`` in batches of 48 (a GA generation), timed
+  interleaved with the single calls in the same runs, and the ratio per CPU-second;
 * the time of one full converged solution (modes + tip receptance on 201 points).
 
 Times are medians of ``--repeat`` runs (the machine may be shared: the best run is
@@ -70,17 +72,27 @@ def main() -> None:
         for p in points:
             ev.evaluate(p, window)
 
-    wall, cpu = [], []
+    def batched():
+        for k in range(0, len(points), 48):
+            ev.evaluate_many(points[k : k + 48], window)
+
+    # Single and batched runs alternate, so that a change of the machine's load hits both.
+    times = {single: ([], []), batched: ([], [])}
     for _ in range(args.repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
-        single()
-        wall.append(time.perf_counter() - t0)
-        cpu.append(time.process_time() - c0)
-    wall, cpu = np.array(wall), np.array(cpu)
+        for fn, (wall, cpu) in times.items():
+            t0, c0 = time.perf_counter(), time.process_time()
+            fn()
+            wall.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
+    wall, cpu = (np.array(x) for x in times[single])
     print(f"{args.count / np.median(wall):.0f} evaluations/s "
           f"(f1–f3, ζ1–ζ3 and H on 201 points per candidate; wall median; "
           f"best run {args.count / wall.min():.0f}; "
           f"{args.count / np.median(cpu):.0f} per CPU-second, which a busy machine affects less)")
+    b_wall, b_cpu = (np.array(x) for x in times[batched])
+    print(f"{args.count / np.median(b_wall):.0f} evaluations/s batched (evaluate_many, 48 candidates per call "
+          f"as a GA generation; best run {args.count / b_wall.min():.0f}; "
+          f"{args.count / np.median(b_cpu):.0f} per CPU-second: {np.median(cpu) / np.median(b_cpu):.2f}× the single calls)")
     iterations = np.array([ev.evaluate(p, window).iterations for p in points])
     print(f"inverse iterations per candidate: mean {iterations.mean():.2f}, max {iterations.max()}, "
           f"dense fallbacks {np.count_nonzero(iterations == 0)}")

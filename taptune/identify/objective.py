@@ -263,5 +263,33 @@ class Objective:
         return self.BAD if f >= self.BAD else float(f + s)
 
     def batch(self, P) -> np.ndarray:
-        """J for every row of P."""
-        return np.array([self(p) for p in np.atleast_2d(P)])
+        """J for every row of P (a GA generation): the points not yet remembered are
+        evaluated together where the evaluators can (``evaluate_many``), else one by one."""
+        P = np.atleast_2d(np.asarray(P, dtype=float))
+        keys = [p.tobytes() for p in P]
+        new = list(dict.fromkeys(k for k in keys if k not in self.memo))
+        if len(new) > 1 and all(hasattr(ev, "evaluate_many") for ev in self.evaluators):
+            rows = [keys.index(k) for k in new]
+            terms = self._batched_terms(P[rows])
+            if terms is not None:
+                for k, t in zip(new, terms):
+                    self.memo[k] = t if np.all(np.isfinite(t)) else np.array([self.BAD, self.BAD])
+        return np.array([self(p) for p in P])
+
+    def _batched_terms(self, P) -> np.ndarray | None:
+        """Summed (frequency, shape) terms of every row of P, (n, 2), from the evaluators'
+        batch form; None if a model evaluation fails (the caller then goes one by one)."""
+        out = np.zeros((len(P), 2))
+        opt = self.options
+        try:
+            for target, ev in zip(self.targets, self.evaluators):
+                e = ev.evaluate_many(P, target.window_hz)
+                # objective_terms, vectorised over the rows.
+                measured = target.measured_hz
+                rel = (e.bending_hz[:, np.array(target.modes) - 1] - measured) / (opt.sigma_f * measured)
+                out[:, 0] += np.sum(rel * rel, axis=1)
+                diff = target.shape - model_shape(target.window_hz, e.tip_receptance, opt)
+                out[:, 1] += np.sum(diff * diff, axis=1) / diff.shape[1] / opt.sigma_s**2
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError):
+            return None
+        return out

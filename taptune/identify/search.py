@@ -153,9 +153,13 @@ def polish_task(u0: np.ndarray) -> RunResult:
 
 def extreme_task(args) -> RunResult:
     """The smallest or largest value of one parameter inside the near-optimal set."""
-    axis, sign, start, limits = args
+    axis, sign, start, limits, start_terms = args
     objective: Objective = STATE["objective"]
     options = STATE["options"]
+    # The start's terms as the caller has them: recomputed in a worker by another path
+    # (batched or single solver) they could differ in the last digits, and COBYLA's path
+    # with them, so that jobs would change the result.
+    objective.memo.setdefault(unit_to_p(start).tobytes(), start_terms)
     if (stopped := _cancelled(start)) is not None:
         return stopped
     with _limits():
@@ -412,8 +416,9 @@ def near_optimal_set(objective: Objective, workers: Workers, results: list[RunRe
     if options.extreme_axes:
         # Each push starts from the member already farthest that way: the archives have
         # walked part of the valley, so COBYLA needs far fewer steps to reach its end.
-        tasks = [(axis, sign, members[np.argmax(sign * members[:, axis])], limits)
-                 for axis in options.extreme_axes for sign in (-1.0, 1.0)]
+        starts = [(axis, sign, members[np.argmax(sign * members[:, axis])])
+                  for axis in options.extreme_axes for sign in (-1.0, 1.0)]
+        tasks = [(axis, sign, u, limits, summed_terms(objective, unit_to_p, u)) for axis, sign, u in starts]
         ends = workers.map(extreme_task, tasks, phase=(0.85, 0.0, "measuring the uncertainty"))
         evaluations += sum(e.evaluations for e in ends)
         found = np.vstack([e.archive_u for e in ends])

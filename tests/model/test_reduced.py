@@ -149,6 +149,38 @@ def test_evaluate_many_equals_evaluate(reference):
         np.testing.assert_allclose(batch[i].tip_receptance, single.tip_receptance, rtol=1e-6)
 
 
+def assert_batch_equals_single(ev, P, window):
+    """evaluate_many equals evaluate row by row within the solver's tolerances, with the
+    same inverse iterations per candidate (the same convergence test)."""
+    batch = ev.evaluate_many(P, window)
+    single = [ev.evaluate(p, window) for p in P]
+    np.testing.assert_array_equal(batch.iterations, [e.iterations for e in single])
+    for b, s in zip(batch.tip_receptance, single):
+        assert np.max(np.abs(b - s.tip_receptance)) < 1e-7 * np.max(np.abs(s.tip_receptance))
+    np.testing.assert_allclose(batch.bending_hz, [e.bending_hz for e in single], rtol=1e-9)
+    np.testing.assert_allclose(batch.damping_ratio, [e.damping_ratio for e in single], rtol=1e-6)
+    return batch
+
+
+def test_the_batched_solver_equals_the_single_one_across_the_bounds(reference):
+    """40 Latin-hypercube points and 24 corners in one batch: the stacked iteration (one
+    solve per iteration serving as next step and error estimate) takes the same number of
+    iterations as the single one (2 to 5 here) and gives the same modes and receptance."""
+    _, ev = reference
+    batch = assert_batch_equals_single(ev, sample(40, 24, 11), 4800.0 + WINDOW)
+    assert batch.iterations.min() == 2 and batch.iterations.max() > 2
+
+
+def test_unconverged_candidates_of_a_batch_fall_back_to_the_single_solver(reference):
+    """With at most 2 iterations the candidates that need more leave the batch unconverged
+    and are solved one at a time (dense solution: iterations = 0), the others stay batched."""
+    _, ev = reference
+    short = copy.copy(ev)
+    short._solver = _Solver(ev.model, ReductionOptions(max_iterations=2))
+    batch = assert_batch_equals_single(short, sample(24, 8, 12), 4800.0 + WINDOW)
+    assert 0 < np.count_nonzero(batch.iterations == 0) < len(batch)
+
+
 def test_dense_fallback_gives_the_same_answer(reference):
     """A candidate whose inverse iteration does not converge is solved densely on the reduced
     model (iterations = 0); forced here by a solver with an unreachable tolerance."""
