@@ -12,18 +12,19 @@ rows with other bands (``check_tap`` is a pure function): how the verdicts depen
 Needs ``benchmarks.realism`` (the corpus). One reference (identification + 5 checks)
 ≈ 55 CPU-s.
 
-Result (2026-11-23, 12 references each, consistent/differs/inconclusive)::
+Result (2026-11-25, 12 references each, consistent/differs/inconclusive; check split)::
 
-                        check split (held out)     infamily (control)
-    re-clamped          7/0/5                      11/0/1
-    elsewhere           7/0/5                       8/0/4
-    worn 0.5            0/9/3                       0/11/1
-    worn 0.3            0/12/0                      0/12/0
-    worn 0.5 elsewhere  0/5/7                       0/5/7
+                        issue tier                 harsh tier
+    re-clamped          8/0/4                      6/0/6
+    elsewhere           4/0/8                      2/0/10
+    worn 0.5            0/9/3                      0/9/3
+    worn 0.3            0/11/1                     0/12/0
+    worn 0.5 elsewhere  0/5/7                      0/4/8
 
-No good holder reads ``differs``, no worn one ``consistent``. The worn holders read
-inconclusive where the true shift is about one band (che007 1.25 % vs ±1.28 %, che009
-2.8 % vs ±2.9 %, inf007 2.1 % vs ±1.35 %) or the identification itself is off (che008).
+No good holder reads ``differs``, no worn one ``consistent`` (before the rule that the
+wear shift must itself leave the good band, iche001 "worn 0.5 elsewhere" read
+``consistent``: a 3 % shift inside a ±4 % band, the prediction 6 % off). Inconclusive
+verdicts come from wide bands (one tap, mode 1 only, stick-out read to ±0.3 mm).
 
     python -m benchmarks.bench_check --n 12 [--split check|infamily] [--tier harsh|issue] [--jobs 2] [--out check.json]
 
