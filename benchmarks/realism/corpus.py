@@ -296,15 +296,22 @@ def case_of(record: dict) -> Case:
     return case
 
 
-def _try_case(rng, split, index, seed, in_family) -> Case | None:
-    family = FAMILIES[index % len(FAMILIES)]  # every family equally often
+def _draw_tool(rng, index: int, name_prefix: str):
+    """The family (every one equally often), tool and described holder of a case, and the
+    tool's insertion limits [mm] (the first random draws of both tiers)."""
+    family = FAMILIES[index % len(FAMILIES)]
     d = float(rng.choice(family.diameters))
     total, flute = TOOLS[int(d)][int(rng.integers(2))]
-    name = f"{split[:3]}{index:03d}-{family.key}-D{d:g}"
+    name = f"{name_prefix}{index:03d}-{family.key}-D{d:g}"
     holder_name = f"{family.title} D{d:g} [realism {name}]"
     described_holder = make_holder(family, d, holder_name)
     max_insert = min(max_insertion_mm(described_holder, d), total - flute - 1.0)
-    min_insert = min_insertion_mm(family, d)
+    return family, d, total, flute, name, holder_name, described_holder, max_insert, min_insertion_mm(family, d)
+
+
+def _try_case(rng, split, index, seed, in_family) -> Case | None:
+    family, d, total, flute, name, holder_name, described_holder, max_insert, min_insert = \
+        _draw_tool(rng, index, split[:3])
     if max_insert < min_insert + 10.0:
         return None
     insert = float(np.round(rng.uniform(min_insert, max_insert) * 2) / 2)
@@ -341,6 +348,15 @@ def _try_case(rng, split, index, seed, in_family) -> Case | None:
         if low_grade:
             kinds.append("lowgrade")
     holder = TruthHolder(draw_params(rng), profile, mass, asym, asym_kind, angle)
+    return _build_case(rng, name, split, seed, family, d, (total, flute), described_holder, holder_name, holder,
+                       stickout, offsets, ruler, od_f, ratio, low_grade, kinds)
+
+
+def _build_case(rng, name, split, seed, family, d, tool_mm, described_holder, holder_name, holder, stickout,
+                offsets, ruler, od_f, ratio, low_grade, kinds, tier="harsh") -> Case | None:
+    """The drawn case's assemblies, truths and recording (the last random draws of both
+    tiers, in the same order); None when a geometry is not possible."""
+    total, flute = tool_mm
     try:
         described = assemble_geometry(described_holder, make_tool(d, total, flute), stickout, f"{name}.toml")
         true_holder = make_holder(family, d, holder_name, od_f)
@@ -357,19 +373,14 @@ def _try_case(rng, split, index, seed, in_family) -> Case | None:
     recording = draw_recording(rng, low_grade, truth.bending_hz)
     return Case(name=name, split=split, seed=seed, family=family.key, described=described,
                 true_assembly=true_asm, holder=holder, recording=recording, truth=truth,
-                queries=tuple(queries), kinds=tuple(kinds), true_od_factors=od_f, true_flute_ratio=ratio)
+                queries=tuple(queries), kinds=tuple(kinds), true_od_factors=od_f, true_flute_ratio=ratio,
+                tier=tier)
 
 
 def _try_issue_case(rng, split, index, seed, in_family) -> Case | None:
     """A case of the ``issue`` tier (module docstring): the deviations issue 9 describes."""
-    family = FAMILIES[index % len(FAMILIES)]
-    d = float(rng.choice(family.diameters))
-    total, flute = TOOLS[int(d)][int(rng.integers(2))]
-    name = f"i{split[:3]}{index:03d}-{family.key}-D{d:g}"
-    holder_name = f"{family.title} D{d:g} [realism {name}]"
-    described_holder = make_holder(family, d, holder_name)
-    max_insert = min(max_insertion_mm(described_holder, d), total - flute - 1.0)
-    min_insert = min_insertion_mm(family, d)
+    family, d, total, flute, name, holder_name, described_holder, max_insert, min_insert = \
+        _draw_tool(rng, index, "i" + split[:3])
     # Stick-outs 3–6·D, here and at the queries (flutes clear of the holder: insert ≤ total − flute − 1).
     lo, hi = max(min_insert, total - 6.0 * d), min(max_insert, total - 3.0 * d)
     if hi < lo + 2.0 or max_insert < min_insert + 10.0:
@@ -404,22 +415,8 @@ def _try_issue_case(rng, split, index, seed, in_family) -> Case | None:
         if low_grade:
             kinds.append("lowgrade")
     holder = TruthHolder(draw_params(rng), profile, mass, asym, asym_kind, angle)
-    try:
-        described = assemble_geometry(described_holder, make_tool(d, total, flute), stickout, f"{name}.toml")
-        true_asm = assemble_geometry(make_holder(family, d, holder_name, od_f), make_tool(d, total, flute, ratio),
-                                     stickout + float(rng.uniform(-ruler, ruler)), f"{name} (truth)")
-        queries = []
-        for off in offsets:
-            q_true = stickout + off + float(rng.uniform(-ruler, ruler))
-            queries.append(make_query(true_asm, holder, stickout + off, q_true))
-        truth = truth_modes(true_asm, holder)
-    except InputError:
-        return None
-    recording = draw_recording(rng, low_grade, truth.bending_hz)
-    return Case(name=name, split=split, seed=seed, family=family.key, described=described,
-                true_assembly=true_asm, holder=holder, recording=recording, truth=truth,
-                queries=tuple(queries), kinds=tuple(kinds), true_od_factors=od_f, true_flute_ratio=ratio,
-                tier="issue")
+    return _build_case(rng, name, split, seed, family, d, (total, flute), described_holder, holder_name, holder,
+                       stickout, offsets, ruler, od_f, ratio, low_grade, kinds, tier="issue")
 
 
 def make_corpus(split: str, n: int, tier: str = "harsh") -> list[Case]:

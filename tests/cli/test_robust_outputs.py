@@ -13,6 +13,7 @@ from taptune.io.recording import FakeInputStream, InputDevice, Recorder, Trigger
 from taptune.library.schema import HolderEntry
 from taptune.library.store import HolderLibrary
 from taptune.model.params import NOMINAL
+from tests.cli.test_review_inputs import one_line_exit_2
 from tests.io.test_recording import FS, synthetic_taps
 
 
@@ -23,12 +24,6 @@ def library(tmp_path, reference_toml):
     return lib
 
 
-def one_line_exit_2(capsys, code, *needles):
-    err = capsys.readouterr().err
-    assert code == 2, err
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
-    for needle in needles:
-        assert needle in err
 
 
 # --------------------------------------------------------------------------- the library is never an output
