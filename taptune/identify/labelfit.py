@@ -79,6 +79,36 @@ class LabelChoice:
     model_hz: tuple[float, ...]
 
 
+class RememberedEvaluator:
+    """An evaluator that solves each (parameter vector, window) once.
+
+    The quick fits of the plausible labelings all start from the same points (the
+    nominal holder, a soft and a stiff contact) with the same finite-difference steps,
+    and each fit's optimum is evaluated again for its model frequencies and its levels:
+    the same candidates, solved once. The evaluation is a pure function of p and the
+    window, so a remembered one is the very result a new solve would give.
+
+    Parameters
+    ----------
+    evaluator : FastEvaluator-like
+        ``evaluate(p, window_hz)``.
+    """
+
+    def __init__(self, evaluator):
+        self.evaluator = evaluator
+        self._seen = {}
+
+    def evaluate(self, p, window_hz):
+        """``evaluator.evaluate(p, window_hz)``, solved only the first time."""
+        p = np.asarray(p, dtype=float)
+        window_hz = np.asarray(window_hz, dtype=float)
+        key = (p.tobytes(), window_hz.tobytes())
+        found = self._seen.get(key)
+        if found is None:
+            found = self._seen[key] = self.evaluator.evaluate(p, window_hz)
+        return found
+
+
 def quick_fit(evaluator, measured: dict[int, float], sigma=0.01) -> tuple[float, np.ndarray, np.ndarray]:
     """MAP fit of the frequency-setting parameters to measured bending frequencies.
 
@@ -223,7 +253,7 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
     pool = [lab for lab in pool if sum(i is not None for i in lab.modes) >= n_current]
     if len(pool) < 2:
         return None, []
-    evaluator = evaluator_of()
+    evaluator = RememberedEvaluator(evaluator_of())
     choices = []
     for lab in pool:
         chosen = {m + 1: peaks[i] for m, i in enumerate(lab.modes) if i is not None}
