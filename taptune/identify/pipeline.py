@@ -55,17 +55,21 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
     :func:`taptune.signal.analysis.analyse_recording`.
     """
     from taptune.identify.labelfit import choose_labeling, labelled_modes, relabelled
-    from taptune.signal.analysis import SpectrumOptions, analyse_recording
+    from taptune.signal.analysis import SpectrumOptions, analyse_recording, find_spectral_peaks
 
     if assembly is None:
         return analyse_recording(recording, **kwargs)
     guidance = guidance or model_expectation(assembly, params, model_options)
     expected, bounds, spread = guidance
     kwargs.setdefault("interface", assembly.holder.interface)
-    analysis = analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, spread_hz=spread, **kwargs)
+    spectrum_options = kwargs.get("options") or SpectrumOptions()
+    # The spectra and picked peaks serve the analysis and, after a relabelling, the
+    # full refinement of the new bending peaks (with the pole fits' spectra cached).
+    found = find_spectral_peaks(recording, spectrum_options)
+    analysis = analyse_recording(recording, expected_hz=expected, bounds_hz=bounds, spread_hz=spread, found=found,
+                                 **kwargs)
     if not decide_labels:
         return analysis
-    spectrum_options = kwargs.get("options") or SpectrumOptions()
 
     def evaluator():
         from taptune.model import ModelOptions
@@ -80,17 +84,15 @@ def analyse_for_assembly(recording, assembly=None, params: HolderParams | None =
         return analysis
     if modes == labelled_modes(analysis.peaks, len(modes)):
         return replace(analysis, warnings=list(analysis.warnings) + warnings) if warnings else analysis
-    return relabelled(analysis, modes, warnings, analysis.excluded_bands_hz,
-                      refine=_full_refinement(recording, spectrum_options))
+    return relabelled(analysis, modes, warnings, analysis.excluded_bands_hz, refine=_full_refinement(found))
 
 
-def _full_refinement(recording, spectrum_options):
+def _full_refinement(r):
     """``refine(peaks, indices)``: the full pole-fit frequency of the given peaks (the
-    analysis refined non-bending peaks only roughly)."""
-    from taptune.signal.analysis import find_spectral_peaks
+    analysis refined non-bending peaks only roughly); ``r`` is the recording's
+    :func:`~taptune.signal.analysis.find_spectral_peaks`."""
 
     def refine(peaks, indices):
-        r = find_spectral_peaks(recording, spectrum_options)
         base = r["peaks"]
         if not base:
             return peaks

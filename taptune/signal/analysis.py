@@ -357,7 +357,7 @@ def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz
 
 def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", expected_hz=None,
                       bounds_hz=None, options: SpectrumOptions = SpectrumOptions(),
-                      interface_tap: Recording | None = None, spread_hz=None) -> SpectrumAnalysis:
+                      interface_tap: Recording | None = None, spread_hz=None, found: dict | None = None) -> SpectrumAnalysis:
     """Find the taps, average their spectra, pick, refine and label the peaks.
 
     Parameters
@@ -376,6 +376,9 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     spread_hz : array_like, shape (n, k), optional
         How far each model bending frequency moves [Hz] per plausible spread of each
         holder parameter (:func:`~taptune.signal.labels.assign_bending`); sharper labels.
+    found : dict, optional
+        :func:`find_spectral_peaks` of ``recording`` with ``options``, when the caller
+        has it already (it refines peaks again after a relabelling): not computed twice.
 
     Returns
     -------
@@ -388,7 +391,7 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     """
     o = options
     name = recording.name
-    r = find_spectral_peaks(recording, o)
+    r = find_spectral_peaks(recording, o) if found is None else found
     peaks = r["peaks"]
     if not peaks:
         raise InputError(f"{name}: no spectral peak stands out of the noise")
