@@ -83,17 +83,21 @@ def run(args) -> int:
     from taptune.identify.pipeline import identification_record
     from taptune.identify.optimize import Cancelled
 
-    from taptune.library.store import HolderLibrary, default_library_path
-
     from taptune.cli.common import check_seed_and_jobs
 
     check_seed_and_jobs(args)
-    library = None if args.no_save else default_library_path(args.library)
+    library = None
+    if not args.no_save:
+        # The library's modules only when the holder is stored (--no-save skips their import).
+        from taptune.library.store import default_library_path
+
+        library = default_library_path(args.library)
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
         output_path(path, what, library=args.library, inputs=command_inputs(args))
     recordings, assemblies = load_inputs(args.wav, args.assembly)
     if library is not None:
         from taptune.io.atomic import check_writable
+        from taptune.library.store import HolderLibrary
 
         # A broken or unwritable library is reported before the fit, not after it.
         HolderLibrary(library).entries()
