@@ -76,6 +76,7 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, t
     from benchmarks.realism.audio import audibility_margins, record
     from taptune.errors import TaptuneError
     from taptune.identify import IdentifyOptions, predict
+    from taptune.identify.bands import measured_modes
     from taptune.identify.pipeline import identify_recordings
 
     case = make_case(split, index, tier=tier)
@@ -115,7 +116,7 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, t
     t1 = time.process_time()
     # As the library predicts (taptune.library.schema.Entry.predict): the fit's misfit floor,
     # the identified assembly (Δ stick-out) and the modes the tap measured.
-    measured = [m is not None for m in result.bending_measured_hz[0]]
+    measured = measured_modes(result.bending_measured_hz)
     out["predictions"] = predictions(case, lambda asm: predict(
         result.param_sets, asm, relative_floor=result.relative_floor, identified=[case.described],
         measured_modes=measured), result.bending_measured_hz[0])

@@ -24,8 +24,6 @@ from taptune.io.atomic import atomic_write_bytes
 def result_json(view, item: Item, recording, analysis, group_items, joint_objective: float) -> dict:
     """The identify --json document of one recording, plus what the next batch needs to skip it."""
     data = identification_record([recording], [item.assembly], [analysis], view)
-    # The assembly file's own warnings (a misspelt key, an implied collet) first, as identify does.
-    data["warnings"] = list(dict.fromkeys([*item.assembly.warnings, *data["warnings"]]))
     data["sha256"] = item.sha256
     data["assembly"] = str(item.assembly_path)
     data["assembly_sha256"] = item.assembly_sha256

@@ -112,8 +112,6 @@ def run(args) -> int:
     finally:
         bar.close()
     out = identification_record(recordings, assemblies, analyses, result)
-    # The assembly files' own warnings (a misspelt key, an implied collet) first.
-    out["warnings"] = list(dict.fromkeys([w for a in assemblies for w in a.warnings] + list(out["warnings"])))
     if not args.no_save:
         from taptune.library.record import save_identification
 
@@ -121,8 +119,10 @@ def run(args) -> int:
             name = save_identification(args.library, result, recordings, assemblies)
         except TaptuneError:
             # The library could not take it (a disk full, a lock held too long): the fit
-            # is not lost, the JSON still gets it.
+            # is not lost, the JSON (or the screen) still gets it.
             write_json(out, args.json)
+            if args.json != "-":
+                print_summary(out, result)
             raise
         out["library_entry"] = name
     write_json(out, args.json)

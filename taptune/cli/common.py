@@ -95,7 +95,11 @@ def refuse_library_output(path: str | os.PathLike | None, what: str, library=Non
         return
     from taptune.library.store import default_library_path
 
-    libraries = [default_library_path(library), default_library_path(None)] + [Path(p) for p in protect if p]
+    libraries = [default_library_path(library)] + [Path(p) for p in protect if p]
+    try:
+        libraries.append(default_library_path(None))
+    except (RuntimeError, KeyError):
+        pass  # no home folder (a container's bare user): there is no default library to protect
     target = Path(path)
     for lib in libraries:
         if _same_file(target, lib):
@@ -146,19 +150,13 @@ def output_path(path: str | None, what: str, protect=(), library=None, create: b
     if wanted and target.suffix.lower() not in wanted:
         # The writers do not follow the name: a plot named x.pdf or x.txt held PNG data.
         raise InputError(f"{path}: the {what} is written as {' or '.join(wanted)}; name the file so")
+    check_writable(path)  # a file or a read-only folder in the way: now, not after minutes of fitting
     if not create:
-        check_writable(path)
         return path
-    folder = target.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    if not folder.is_dir():
-        raise InputError(f"{path}: cannot write the {what} ({folder} is a file, not a folder)")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise InputError(f"{path}: cannot write the {what} ({target.parent}: {err.strerror})") from None
-    check_writable(path)  # a read-only folder: now, not after minutes of fitting
     return path
 
 

@@ -21,8 +21,8 @@ per mode, in Hz::
   asymmetric holder): ``c × f × (1 + Δ/DELTA_REF_MM)`` with Δ the stick-out change from
   the nearest identification. The coefficient c depends on the prediction's **evidence
   group** (:func:`evidence_groups`): ``pinned`` — the near-optimal parameter sets agree on
-  this frequency within :data:`PINNED_SPREAD`; ``free`` — they do not; ``unknown`` — the
-  mode was not measured in the tap, or there is a single parameter set. c is calibrated
+  this frequency within :data:`PINNED_SPREAD`; ``free`` — they do not, or there is a
+  single parameter set; ``unknown`` — the mode was not measured in the tap. c is calibrated
   per group (Mondrian split-conformal prediction, :func:`conformal_quantile`) on a corpus
   of holders outside the model family (:data:`MODEL_FORM`; ``benchmarks/calibrate_bands.py``).
 

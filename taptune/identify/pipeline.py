@@ -167,6 +167,8 @@ def identification_record(recordings, assemblies, analyses, result) -> dict:
         advice = second_tap_advice([outlook])
         if advice:
             out["warnings"].append(advice)
+    # The assembly files' own warnings (a misspelt key, an implied collet) first, once each.
+    out["warnings"] = list(dict.fromkeys([w for a in assemblies for w in a.warnings] + out["warnings"]))
     return out
 
 

@@ -248,12 +248,20 @@ def _remote(args):
 
 
 def _shared_file(blob: bytes) -> str:
-    """Write ``blob`` to a new temporary file, in shared memory where there is some; its path."""
-    folder = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else None
-    fd, path = tempfile.mkstemp(prefix="taptune-objective-", suffix=".pkl", dir=folder)
-    with os.fdopen(fd, "wb") as f:
-        f.write(blob)
-    return path
+    """Write ``blob`` to a new temporary file, in shared memory where there is room, else
+    in the temporary folder; its path. A file that could not be written is removed."""
+    shm = ("/dev/shm",) if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else ()
+    for folder in shm + (None,):
+        fd, path = tempfile.mkstemp(prefix="taptune-objective-", suffix=".pkl", dir=folder)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(blob)
+            return path
+        except OSError:
+            os.unlink(path)
+            if folder is None:
+                raise
+    raise AssertionError("unreachable")
 
 
 class WarmPool:

@@ -556,6 +556,8 @@ class Recorder:
         """
         record_format(self.out_path)
         check_writable(self.out_path)
+        if self.assembly_toml is not None:
+            check_writable(self.sidecar_path)
         factory = self._factory or sounddevice_stream
         if self._factory is None:
             resolved = find_input_device(self.device)
@@ -621,12 +623,20 @@ class Recorder:
         return "no tap was recorded"
 
     def _save(self) -> None:
-        if self.saved_taps == 0 and self.assembly_toml is not None:
-            # With the first tap: the sidecar goes beside the WAV only once there is a WAV.
-            _atomic_write_text(self.sidecar_path, self.assembly_toml)
-        _atomic_write_wav(self.out_path, self.trigger.samples(), self.settings.sample_rate,
-                          record_format(self.out_path))
+        # The taps first: a sidecar that cannot be written must not cost the recording.
+        try:
+            _atomic_write_wav(self.out_path, self.trigger.samples(), self.settings.sample_rate,
+                              record_format(self.out_path))
+        except OSError as err:
+            raise DeviceError(f"cannot save {self.out_path}: {err.strerror or err}; {self._kept()}") from None
+        first = self.saved_taps == 0
         self.saved_taps = len(self.trigger.taps)
+        if first and self.assembly_toml is not None:
+            # With the first tap: the sidecar goes beside the WAV only once there is a WAV.
+            try:
+                _atomic_write_text(self.sidecar_path, self.assembly_toml)
+            except OSError as err:
+                raise DeviceError(f"cannot save {self.sidecar_path}: {err.strerror or err}; {self._kept()}") from None
 
     def close(self) -> None:
         """Stop and close the stream (safe to call twice, and after a device error)."""

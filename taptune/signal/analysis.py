@@ -217,7 +217,7 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
         floor = smooth_floor(freq, noise_mag, q=50)
     else:
         floor = smooth_floor(freq, mag, width_hz=1000.0, q=10)
-    return mono, taps, used, seg_n, freq, tap_mag, mag, noise_mag, floor
+    return mono, taps, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor
 
 
 def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) -> dict:
@@ -227,11 +227,14 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
     -------
     dict
         ``taps, used, freq, tap_mag, mag, noise_mag``; ``peaks`` (list of Peak, kind
-        "other", ascending), ``idx`` (their bins), ``stationary`` (list of bool) and
-        ``refine(peaks, effort) -> peaks`` (see :func:`~taptune.signal.peaks.refine_peaks`).
+        "other", ascending), ``idx`` (their bins), ``over`` (their height over the floor
+        [dB]), ``floor`` (the smoothed noise floor), ``top_db``, ``oversample`` (FFT bins per
+        native bin of a tap segment), ``stationary`` (list of bool) and
+        ``refine(peaks, effort, bins=None, snr=None) -> peaks`` (see
+        :func:`~taptune.signal.peaks.refine_peaks`).
     """
     fs = rec.sample_rate
-    mono, taps, used, seg_n, freq, tap_mag, mag, noise_mag, floor = _peak_spectra(rec, o)
+    mono, taps, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor = _peak_spectra(rec, o)
     fmax = min(o.fmax_hz or np.inf, 0.98 * fs / 2)
     idx, hz, lev, prom, snr, over = pick_peaks(freq, mag, floor, prominence_db=o.prominence_db,
                                             min_snr_db=o.min_snr_db, min_local_db=o.min_local_db,
@@ -261,7 +264,6 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
                         damping_ratio=None if np.isnan(zeta[k]) else float(zeta[k]))
                 for k, q in enumerate(peaks_in)]
 
-    n_disp = seg_n + int(round(o.pre_onset_s * fs))
     return {"taps": taps, "used": used, "freq": freq, "tap_mag": tap_mag, "mag": mag,
             "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
             "top_db": top, "oversample": 2 * (freq.size - 1) / n_disp,

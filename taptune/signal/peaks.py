@@ -751,13 +751,6 @@ def fit_resonance(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
     return float(ratio), float(f[i] + best[1]), best[2]
 
 
-def resonance_test(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
-                   min_half_width_hz: float = 0.5) -> float:
-    """F ratio of a resonance-shaped peak over a flat (sloping) local floor at bin ``i``
-    (:func:`fit_resonance`; tens to thousands for a ringing mode, about 1 for noise)."""
-    return fit_resonance(freq_hz, mag, i, half_hz, oversample, min_half_width_hz)[0]
-
-
 def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: float = 8.0,
                      tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 3.0,
                      ring_hz: float = 250.0, stationary_margin_db: float = 6.0,
@@ -773,7 +766,7 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
     one native bin of the averaged peak, by ``tap_db`` and by ``tap_fraction`` of the
     average's height in dB: a mode rings in every tap alike, while a bump of one tap's
     noise or a click is not where the others have theirs), and it is shaped like a resonance
-    (:func:`resonance_test` ≥ ``f_ratio``). Peaks less than ``stationary_margin_db``
+    (the F ratio of :func:`fit_resonance` ≥ ``f_ratio``). Peaks less than ``stationary_margin_db``
     over the between-tap spectrum ``noise_mag`` are hum, not modes.
 
     Parameters

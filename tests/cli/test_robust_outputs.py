@@ -7,6 +7,7 @@ import os
 import pytest
 
 from taptune.cli import main
+from taptune.errors import InputError
 from taptune.io import recording
 from taptune.io.assembly import load_assembly
 from taptune.io.recording import FakeInputStream, InputDevice, Recorder, TriggerSettings
@@ -114,6 +115,32 @@ def test_the_sidecar_appears_with_the_first_tap(tmp_path):
                 if event.kind == "saved" and event.index == 1:
                     first = sorted(p.name for p in out.parent.iterdir())
     assert first == ["tap.toml", "tap.wav"]
+
+
+def test_a_sidecar_that_cannot_be_written_is_refused_before_listening(tmp_path):
+    out = tmp_path / "rec" / "tap.wav"
+    (tmp_path / "rec" / "tap.toml").mkdir(parents=True)  # a folder where the sidecar goes
+    recorder = Recorder(out, TriggerSettings(sample_rate=FS), assembly_toml="[holder]\n",
+                        stream_factory=FakeInputStream(synthetic_taps([0.3])).factory)
+    with pytest.raises(InputError, match="tap.toml: is a folder"):
+        recorder.start()
+    assert not out.exists()
+
+
+def test_a_failing_save_keeps_the_taps_and_says_why(tmp_path, monkeypatch):
+    out = tmp_path / "rec" / "tap.wav"
+    fake = FakeInputStream(synthetic_taps([0.3, 1.1]))
+
+    def full_disk(path, text):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(recording, "_atomic_write_text", full_disk)
+    with Recorder(out, TriggerSettings(sample_rate=FS, n_taps=2), assembly_toml="[holder]\n",
+                  stream_factory=fake.factory) as recorder:
+        with pytest.raises(recording.DeviceError, match="tap.toml: No space left.*1 tap.*saved in"):
+            while not recorder.done:
+                recorder.poll(timeout=1.0)
+    assert out.exists()  # the first tap is in the WAV; only the sidecar is missing
 
 
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs POSIX permissions, not root")
@@ -235,6 +262,27 @@ def test_a_library_that_refuses_the_save_still_gets_the_fit_into_the_json(monkey
     err = capsys.readouterr().err
     assert code == 1 and "No space left on device" in err and "Traceback" not in err
     assert set(json.loads(out.read_text())["params"]) >= {"k_tt", "k_rr"}  # before: no JSON, the fit was lost
+    # Without --json the fit goes to the screen before the error.
+    code = main(["identify", str(tap_wav), "--assembly", str(reference_toml), "--library", str(tmp_path / "lib.json")])
+    captured = capsys.readouterr()
+    assert code == 1 and "No space left on device" in captured.err and "k_tt = " in captured.out
+
+
+def test_outputs_are_checked_without_a_home_folder(monkeypatch, tmp_path):
+    from pathlib import Path
+
+    from taptune.cli.common import refuse_library_output
+
+    monkeypatch.delenv("TAPTUNE_LIBRARY", raising=False)
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr(Path, "home", staticmethod(no_home))
+    lib = tmp_path / "lib.json"
+    refuse_library_output(tmp_path / "out.json", "JSON", library=lib)  # no default library: nothing to refuse
+    with pytest.raises(InputError, match="is the holder library"):
+        refuse_library_output(lib, "JSON", library=lib)
 
 
 def test_an_unwritable_library_is_refused_before_the_fit(monkeypatch, tap_wav, reference_toml, tmp_path, capsys):

@@ -7,7 +7,7 @@ import pytest
 
 from taptune.signal.analysis import SpectrumOptions, analyse_recording
 from taptune.signal.labels import faint_windows, guided_windows
-from taptune.signal.peaks import Peak, pick_faint_peaks, resonance_test
+from taptune.signal.peaks import Peak, fit_resonance, pick_faint_peaks
 
 from .synthetic import BENDING, expected_and_bounds, workshop_recording
 
@@ -87,8 +87,8 @@ def test_resonance_test_tells_a_mode_from_a_flat_floor():
     floor = 1.0 + 0.1 * np.abs(rng.standard_normal(freq.size))
     mode = floor + 2.0 / np.sqrt(1 + ((freq - 10000.0) / 20.0) ** 2)
     i = int(np.argmin(np.abs(freq - 10000.0)))
-    assert resonance_test(freq, mode, i, half_hz=80.0, oversample=2) > 100
-    assert resonance_test(freq, floor, i, half_hz=80.0, oversample=2) < 8
+    assert fit_resonance(freq, mode, i, half_hz=80.0, oversample=2)[0] > 100
+    assert fit_resonance(freq, floor, i, half_hz=80.0, oversample=2)[0] < 8
 
 
 def test_guided_windows_follow_the_found_modes_and_stay_between_them():
