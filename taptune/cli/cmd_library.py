@@ -81,6 +81,13 @@ def _hz(values) -> str:
     return " ".join("-" if f is None else f"{f:.1f}" for f in values) or "-"
 
 
+def _warn(entries) -> None:
+    """Print what reading found implausible but kept (one line per holder, on stderr)."""
+    for e in entries:
+        for w in e.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+
+
 # --------------------------------------------------------------------------- actions
 
 
@@ -88,6 +95,7 @@ def _list(lib, args) -> int:
     from taptune.cli.common import format_table, write_json
 
     entries = lib.entries()
+    _warn(entries.values())
     rows = [
         {
             "name": e.name,
@@ -187,6 +195,7 @@ def _show(lib, args) -> int:
     from taptune.cli.common import write_json
 
     entry = lib.get(args.name)
+    _warn([entry])
     predictions = None if args.no_predict else _predictions(entry)
     data = {"library": str(lib.path), "holder": entry.to_dict(), "spread": entry.spread()}
     if predictions is not None:

@@ -29,7 +29,8 @@ import numpy as np
 
 from taptune.errors import InputError, LibraryError
 from taptune.io.atomic import atomic_write, atomic_write_bytes
-from taptune.library.schema import PARAM_UNITS, HolderEntry, LibraryFormatError, decode, encode, parse_library
+from taptune.library.schema import (PARAM_UNITS, HolderEntry, LibraryFormatError, decode, encode, parse_library,
+                                    refuse_implausible)
 from taptune.model.params import NAMES
 
 FORMATS = ("json", "csv")
@@ -198,10 +199,14 @@ class ImportReport:
 def import_library(lib, file: str | os.PathLike, replace: bool = False) -> ImportReport:
     """Merge the holders of a library file into ``lib`` (a HolderLibrary), under its lock.
 
-    The whole file is validated first; an invalid file changes nothing. See
+    The whole file is validated first, with the assembly file's plausible ranges (a
+    holder with implausible geometry is refused, naming it); an invalid file changes nothing. See
     :func:`merge_entries` for what happens to each holder.
     """
     theirs = read_library_file(file)
+    for name, entry in theirs.items():
+        # A read keeps an implausible holder (with a warning); the library takes none.
+        refuse_implausible(entry, f"{file}: holder {name!r}", "nothing was imported")
     with lib.edit() as holders:
         return merge_entries(holders, theirs, replace, source=str(file))
 

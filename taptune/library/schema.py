@@ -48,6 +48,7 @@ from pathlib import Path
 from taptune.errors import InputError, LibraryError
 from taptune.io.assembly import (
     GPA,
+    MAX_LENGTH_M,
     MM,
     Assembly,
     Holder,
@@ -248,13 +249,26 @@ def check_holder_dict(value, src: str, key: str = "holder") -> dict:
         out["gauge_length"] = _number(h["gauge_length"], src, f"{key}.gauge_length", 0.0)
         if out["gauge_length"] > length * (1 + 1e-9):
             _fail(src, f"{key}.gauge_length", f"({out['gauge_length']:g} mm) exceeds the holder length ({length:g} mm)")
-    # The assembly file's rules too (plausible lengths, diameters and materials), so a
-    # library holder is never one an assembly file could not describe.
-    try:
-        validate_holder(holder_from_dict(out, f"{src}: {key}"), f"{src}: {key}")
-    except InputError as err:
-        raise LibraryFormatError(str(err)) from None
     return out
+
+
+def holder_range_problem(holder: dict, src: str) -> str | None:
+    """What makes checked holder geometry (:func:`check_holder_dict`) implausible, or None.
+
+    The assembly file's ranges (lengths, diameters, materials: :func:`validate_holder`),
+    so a holder is never saved that an assembly file could not describe. They are
+    checked when a holder is written or imported (refused) and only warned about when a
+    library is read: one holder an older taptune saved with, say, a 1e9 mm segment must
+    not make every other holder of the file unusable. The message names ``src``.
+    """
+    try:
+        h = validate_holder(holder_from_dict(holder, src), src)
+    except InputError as err:
+        return str(err)
+    if h.length > MAX_LENGTH_M:
+        return (f"{src}: [holder] segments add up to {h.length / MM:g} mm: implausible, "
+                f"above {MAX_LENGTH_M / MM:g} mm")
+    return None
 
 
 _TOOL_OPTIONAL = ("shank_diameter", "flute_length", "flute_diameter", "flute_ratio")
@@ -557,6 +571,9 @@ class HolderEntry:
     checks : tuple of CheckRecord
         Every check by one tap (``taptune check``), oldest first; the key is optional in
         the file (libraries from before checks existed) and left out while empty.
+    warnings : tuple of str
+        What reading found implausible but kept (:func:`holder_range_problem`: geometry an
+        older taptune saved); never written to the file, ignored by comparisons.
     """
 
     name: str
@@ -567,8 +584,10 @@ class HolderEntry:
     model_options: dict = field(default_factory=dict)
     identifications: tuple[ProvenanceRecord, ...] = ()
     checks: tuple[CheckRecord, ...] = ()
+    warnings: tuple[str, ...] = field(default=(), compare=False)
 
     def __post_init__(self):
+        object.__setattr__(self, "warnings", tuple(self.warnings))
         object.__setattr__(self, "param_sets", tuple(self.param_sets))
         object.__setattr__(self, "identifications", tuple(self.identifications))
         object.__setattr__(self, "checks", tuple(self.checks))
@@ -609,8 +628,14 @@ class HolderEntry:
 
     @classmethod
     def from_dict(cls, data, source: str = "<library>") -> "HolderEntry":
-        """Validated entry from JSON data; errors name ``source`` (file and holder) and the key."""
-        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__ if f != "checks"), ("checks",))
+        """Validated entry from JSON data; errors name ``source`` (file and holder) and the key.
+
+        Wrong types and missing or unknown keys raise LibraryFormatError; geometry that is
+        well-formed but implausible (:func:`holder_range_problem`) is kept, with a warning
+        in ``warnings`` (writing such an entry is refused: :func:`checked_entry`).
+        """
+        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__ if f not in ("checks", "warnings")),
+                    ("checks",))
         checks = _list(d.get("checks", []), source, "checks")
         holder = check_holder_dict(d["holder"], source)
         interface = _text(d["interface"], source, "interface", _MAX_NAME)
@@ -621,8 +646,13 @@ class HolderEntry:
         if not isinstance(options, dict):
             _fail(source, "model_options", f"must be a JSON object, got {_kind(options)}")
         records = _list(d["identifications"], source, "identifications")
+        name = _text(d["name"], source, "name", _MAX_NAME)
+        problem = holder_range_problem(holder, source)
+        warnings = () if problem is None else (
+            f"{problem}; the holder is kept as it is and listed, but predictions with it are refused: "
+            f"identify it again with a corrected assembly file, or remove it (taptune library remove {name!r})",)
         return cls(
-            name=_text(d["name"], source, "name", _MAX_NAME),
+            name=name,
             holder=holder,
             interface=interface,
             params=check_params(d["params"], source, "params"),
@@ -632,6 +662,7 @@ class HolderEntry:
                 ProvenanceRecord.from_dict(r, source, f"identifications[{i}]") for i, r in enumerate(records)
             ),
             checks=tuple(CheckRecord.from_dict(c, source, f"checks[{i}]") for i, c in enumerate(checks)),
+            warnings=warnings,
         )
 
     def holder_geometry(self) -> Holder:
@@ -744,7 +775,8 @@ def checked_entry(entry: HolderEntry, source: str) -> HolderEntry:
     """``entry`` as it will read back from a file: validated, with plain JSON values.
 
     Raises LibraryFormatError naming ``source`` and the key before anything is written,
-    so a bad entry from a caller is reported as such, not as a broken library.
+    so a bad entry from a caller is reported as such, not as a broken library; implausible
+    geometry (:func:`holder_range_problem`), which a read only warns about, is refused here.
     """
     if not isinstance(entry, HolderEntry):
         raise TypeError(f"{source}: expected a HolderEntry, got {type(entry).__name__}")
@@ -752,7 +784,19 @@ def checked_entry(entry: HolderEntry, source: str) -> HolderEntry:
         text = json.dumps(entry.to_dict(), allow_nan=False)
     except (TypeError, ValueError) as err:
         raise LibraryFormatError(f"{source}: cannot be written as JSON ({err})") from None
-    return HolderEntry.from_dict(json.loads(text), source)
+    checked = HolderEntry.from_dict(json.loads(text), source)
+    refuse_implausible(checked, source, "not saved")
+    return checked
+
+
+def refuse_implausible(entry: HolderEntry, source: str, outcome: str) -> None:
+    """Raise LibraryFormatError naming ``source`` when ``entry``'s geometry is implausible.
+
+    ``outcome`` says what happened instead (``"not saved"``, ``"nothing was imported"``).
+    """
+    problem = holder_range_problem(entry.holder, source)
+    if problem is not None:
+        raise LibraryFormatError(f"{problem}; {outcome}")
 
 
 # --------------------------------------------------------------------------- documents
