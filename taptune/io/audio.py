@@ -24,6 +24,9 @@ from taptune.errors import InputError
 # the band (Nyquist 4 kHz); the analysis warns separately when the expected third mode
 # exceeds 0.9 x Nyquist (MODEL.md §8.3).
 MIN_SAMPLE_RATE = 8000
+#: The rate a tap analysis needs (MODEL.md §8.3: ≥ 44.1 kHz recommended): the bending
+#: modes ring at 3–20 kHz, so below it the spectrum (ending at half the rate) misses some.
+RECOMMENDED_SAMPLE_RATE = 44100
 
 #: Files that go straight to PyAV: AAC in MPEG-4/QuickTime/3GPP containers (phone voice
 #: memos and video), raw ADTS AAC, WebM/Matroska audio.
@@ -131,7 +134,7 @@ def make_recording(samples, sample_rate, path="", subtype="FLOAT") -> Recording:
     if rate < MIN_SAMPLE_RATE:
         raise InputError(
             f"{name}: sample rate {rate} Hz is too low for bending modes "
-            f"(need at least {MIN_SAMPLE_RATE} Hz, 44100 Hz or more recommended)"
+            f"(need at least {MIN_SAMPLE_RATE} Hz, {RECOMMENDED_SAMPLE_RATE} Hz or more recommended)"
         )
     x.setflags(write=False)
     return Recording(samples=x, sample_rate=rate, path=str(path), subtype=str(subtype))

@@ -14,14 +14,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.io.audio import Recording
+from taptune.io.audio import RECOMMENDED_SAMPLE_RATE, Recording
 from taptune.signal.bandwidth import effective_bandwidth, hidden_modes
 from taptune.signal.labels import (LabelOptions, faint_windows, guided_windows, interface_bands,
                                    interface_growth, label_peaks)
 from taptune.signal.peaks import FIT_STARTS_S, Peak, pick_faint_peaks, pick_peaks, refine_peaks, tap_scatter
 from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
                                      tap_segments)
-from taptune.signal.taps import Tap, find_taps, to_mono
+from taptune.signal.taps import Tap, find_taps, full_scale_runs, to_mono
 
 
 @dataclass(frozen=True)
@@ -199,7 +199,9 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
                      pre_onset_s=o.pre_onset_s, segment_s=o.segment_s,
                      double_hit_window_s=o.double_hit_window_s)
     if not taps:
-        raise InputError(f"{name}: no tap found (the recording holds only noise or a steady sound)")
+        why = _unusable(rec)
+        raise InputError(f"{name}: no tap found" + (f": {why}" if why else
+                                                     " (the recording holds only noise or a steady sound)"))
     used = [t for t in taps if t.used]
     seg_n = int(round(o.segment_s * fs))
     if max(t.end - t.onset for t in used) < int(0.01 * fs):
@@ -218,6 +220,21 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
     else:
         floor = smooth_floor(freq, mag, width_hz=1000.0, q=10)
     return mono, taps, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor
+
+
+def _unusable(rec: Recording) -> str:
+    """Why a recording without a usable tap may hold none: too low a rate, an overloaded input ('' if neither)."""
+    why = []
+    fs = rec.sample_rate
+    if fs < RECOMMENDED_SAMPLE_RATE:
+        why.append(f"its sample rate is {fs} Hz, so its spectrum ends at {fs / 2:g} Hz, below what a tap analysis "
+                   f"needs (bending modes ring at 3–20 kHz): record at {RECOMMENDED_SAMPLE_RATE} Hz or more "
+                   "(48 kHz WAV), not with a phone's voice or call recorder")
+    runs = full_scale_runs(rec.samples)
+    if runs:
+        why.append(f"it is clipped at full scale ({runs} flat tops of 3 or more samples): the input is overloaded; "
+                   "lower the input gain and tap softer")
+    return "; ".join(why)
 
 
 def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) -> dict:
@@ -277,8 +294,9 @@ def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions) -> list[str]:
     n_dbl = sum(t.double_hit for t in taps)
     n_used = sum(t.used for t in taps)
     if n_clip:
-        w.append(f"{n_clip} of {n} taps clipped" + (": left out of the average" if n_used < n
-                                                    else ": used anyway, levels are distorted"))
+        w.append(f"{name}: clipped at full scale in {n_clip} of {n} taps: the levels are unreliable; tap softer or "
+                 "lower the input gain" + (" (the clipped taps are left out of the average)" if n_used < n
+                                           else " (used anyway: no tap is clean)"))
     if n_dbl:
         w.append(f"{n_dbl} of {n} taps are double hits" + (": left out of the average" if n_used < n
                                                            else ": used anyway"))
@@ -396,7 +414,8 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     r = find_spectral_peaks(recording, o) if found is None else found
     peaks = r["peaks"]
     if not peaks:
-        raise InputError(f"{name}: no spectral peak stands out of the noise")
+        why = _unusable(recording)
+        raise InputError(f"{name}: no spectral peak stands out of the noise" + (f": {why}" if why else ""))
     warnings = _tap_warnings(r["taps"], name, o)
     bands, w = interface_bands(interface, o.band_table)
     if w:

@@ -130,17 +130,58 @@ def _flat_top_runs(seg, hi: float, lo: float, tol: float, min_run: int = 2, min_
     half-cycle holds one or more samples at the limit). The two polarities are checked
     separately because a DC offset makes them clip at different levels.
     """
-    at = (np.abs(seg - hi) <= tol) | (np.abs(seg - lo) <= tol)
-    count = np.count_nonzero(at)
+    at_hi = np.abs(seg - hi) <= tol
+    at_lo = np.abs(seg - lo) <= tol
+    count = np.count_nonzero(at_hi | at_lo)
     if count >= min_count:
         return True
-    if count < min_run:
-        return False
-    # Longest run of True values.
-    d = np.diff(np.concatenate(([0], at.astype(np.int8), [0])))
-    starts = np.flatnonzero(d == 1)
-    ends = np.flatnonzero(d == -1)
-    return bool(np.max(ends - starts) >= min_run)
+    # A run must stay at one extreme: at a low sample rate (8 kHz) a free ring-down of a
+    # mode near Nyquist swings from its maximum to its minimum in one sample, which is no
+    # flat top.
+    return bool(_longest_run(at_hi) >= min_run or _longest_run(at_lo) >= min_run)
+
+
+def _longest_run(mask) -> int:
+    """Length of the longest run of True values in the 1-D boolean ``mask``."""
+    if not np.any(mask):
+        return 0
+    d = np.diff(np.concatenate(([0], np.asarray(mask, dtype=np.int8), [0])))
+    return int(np.max(np.flatnonzero(d == -1) - np.flatnonzero(d == 1)))
+
+
+#: "At or very near full scale": within 0.1 dB of it (a recorder's own limiter or a
+#: converter that stops one LSB short still counts; a loud but clean sound stays below).
+NEAR_FULL_SCALE = 10 ** (-0.1 / 20)
+
+
+def full_scale_runs(samples, min_run: int = 3, level: float = NEAR_FULL_SCALE) -> int:
+    """Number of stretches of ``min_run`` or more consecutive samples at full scale.
+
+    Parameters
+    ----------
+    samples : array_like, shape (n,) or (n, channels)
+        Samples, full scale 1.
+    min_run : int
+        Consecutive samples at one polarity's limit that make a flat top.
+    level : float
+        What counts as full scale (|x| ≥ ``level``).
+
+    Returns
+    -------
+    int
+        Flat tops over all channels and both polarities. A ring-down passes its peak in
+        one or two samples; three in a row at full scale is an overloaded input, whether
+        or not a tap can be found in it (an input so hot that the noise clips hides the taps).
+    """
+    x = np.asarray(samples, dtype=np.float64)
+    x = x[:, None] if x.ndim == 1 else x
+    total = 0
+    for c in range(x.shape[1]):
+        col = x[:, c]
+        for mask in (col >= level, col <= -level):
+            d = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
+            total += int(np.count_nonzero(np.flatnonzero(d == -1) - np.flatnonzero(d == 1) >= min_run))
+    return total
 
 
 def clip_levels(samples, subtype: str = "FLOAT") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
