@@ -13,7 +13,8 @@ samples, NaN/Inf samples, a rate below the minimum). Problems that leave the dat
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import struct
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -59,12 +60,16 @@ class Recording:
         soundfile subtype (``"PCM_16"``, ``"PCM_24"``, ``"FLOAT"``, ``"MPEG_LAYER_III"``,
         ``"OPUS"`` …) or, for files PyAV decoded, FFmpeg's codec name (``"aac"``) or the
         PCM subtype it maps to; it tells the analysis what full scale means for clipping.
+    warnings : tuple of str
+        What reading found wrong but usable (a WAV cut short), each naming the file; the
+        analysis puts them first in its own warnings.
     """
 
     samples: np.ndarray
     sample_rate: int
     path: str = ""
     subtype: str = "FLOAT"
+    warnings: tuple[str, ...] = field(default=(), compare=False)
 
     @property
     def channels(self) -> int:
@@ -97,7 +102,7 @@ class Recording:
         return self.path or "<recording>"
 
 
-def make_recording(samples, sample_rate, path="", subtype="FLOAT") -> Recording:
+def make_recording(samples, sample_rate, path="", subtype="FLOAT", warnings=()) -> Recording:
     """Check samples from any source and wrap them in a :class:`Recording`.
 
     Parameters
@@ -108,6 +113,8 @@ def make_recording(samples, sample_rate, path="", subtype="FLOAT") -> Recording:
         Rate [Hz]; at least :data:`MIN_SAMPLE_RATE`.
     path, subtype : str
         Provenance, see :class:`Recording`.
+    warnings : sequence of str
+        What reading found wrong but usable, see :class:`Recording`.
 
     Raises
     ------
@@ -137,7 +144,7 @@ def make_recording(samples, sample_rate, path="", subtype="FLOAT") -> Recording:
             f"(need at least {MIN_SAMPLE_RATE} Hz, {RECOMMENDED_SAMPLE_RATE} Hz or more recommended)"
         )
     x.setflags(write=False)
-    return Recording(samples=x, sample_rate=rate, path=str(path), subtype=str(subtype))
+    return Recording(samples=x, sample_rate=rate, path=str(path), subtype=str(subtype), warnings=tuple(warnings))
 
 
 def read_audio(path) -> Recording:
@@ -198,7 +205,71 @@ def read_audio(path) -> Recording:
             raise InputError(message) from None
     except OSError as err:
         raise InputError(f"{name}: cannot read ({err.strerror or err})") from None
-    return make_recording(data, rate, path=name, subtype=subtype)
+    return make_recording(data, rate, path=name, subtype=subtype, warnings=_cut_short(p, name, data.shape[0], rate))
+
+
+def _cut_short(p: Path, name: str, frames: int, rate: int) -> tuple[str, ...]:
+    """A warning when a WAV file holds less audio than its header announces (else none).
+
+    libsndfile reads what is there without a word, so a copy or a recording that was
+    interrupted would pass for a complete, shorter one.
+    """
+    found = wav_data_sizes(p)
+    if found is None:
+        return ()
+    declared, present, block_align, header_rate = found
+    if declared <= present:
+        return ()
+    announced_s = declared // block_align / header_rate
+    return (f"{name}: the file is cut short (an interrupted copy or recording?): its header announces "
+            f"{announced_s:.3f} s of audio but it holds only {frames / rate:.3f} s; the analysis uses what is there",)
+
+
+def wav_data_sizes(path) -> tuple[int, int, int, int] | None:
+    """What a WAV header says about its audio and what the file holds.
+
+    Returns
+    -------
+    (declared, present, block_align, sample_rate) or None
+        The data chunk's size as its header (or the RF64 ``ds64`` chunk) gives it and the
+        bytes of it in the file [bytes], the bytes per frame and the rate [Hz]; None for
+        a file that is no RIFF/RIFX/RF64 WAVE, whose chunks cannot be walked to ``data``,
+        or whose writer left the size open (0 or 0xFFFFFFFF: recorders that stream).
+    """
+    try:
+        with open(path, "rb") as f:
+            size = f.seek(0, 2)
+            f.seek(0)
+            head = f.read(12)
+            if len(head) < 12 or head[8:12] != b"WAVE" or head[:4] not in (b"RIFF", b"RIFX", b"RF64"):
+                return None
+            order = ">" if head[:4] == b"RIFX" else "<"
+            pos, block_align, rate, ds64_data = 12, None, None, None
+            for _ in range(64):  # a WAV has a handful of chunks before its data
+                f.seek(pos)
+                chunk = f.read(8)
+                if len(chunk) < 8:
+                    return None
+                cid, csize = chunk[:4], struct.unpack(order + "I", chunk[4:])[0]
+                if cid == b"ds64":
+                    body = f.read(16)
+                    if len(body) == 16:
+                        ds64_data = struct.unpack("<Q", body[8:16])[0]
+                elif cid == b"fmt ":
+                    body = f.read(16)
+                    if len(body) < 16:
+                        return None
+                    _, _, rate, _, block_align = struct.unpack(order + "HHIIH", body[:14])
+                elif cid == b"data":
+                    if head[:4] == b"RF64" and csize == 0xFFFFFFFF:
+                        csize = ds64_data
+                    if not csize or csize == 0xFFFFFFFF or not block_align or not rate:
+                        return None
+                    return int(csize), max(size - pos - 8, 0), int(block_align), int(rate)
+                pos += 8 + csize + (csize & 1)  # chunks are padded to an even size
+    except (OSError, struct.error):
+        return None
+    return None
 
 
 def _read_av(p: Path, name: str):

@@ -192,7 +192,7 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
     min_len = o.pre_onset_s + 0.02
     if rec.duration_s < min_len:
         raise InputError(f"{name}: {rec.duration_s * 1000:.1f} ms is shorter than one tap "
-                         f"(need at least {min_len * 1000:.0f} ms)")
+                         f"(need at least {min_len * 1000:.0f} ms)" + _read_notes(rec))
     mono = to_mono(x_raw, fs, o.tap_smooth_s)
     taps = find_taps(mono, fs, raw=x_raw, subtype=rec.subtype, smooth_s=o.tap_smooth_s,
                      threshold=o.tap_threshold, min_interval_s=o.min_tap_interval_s,
@@ -205,7 +205,8 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
     used = [t for t in taps if t.used]
     seg_n = int(round(o.segment_s * fs))
     if max(t.end - t.onset for t in used) < int(0.01 * fs):
-        raise InputError(f"{name}: the tap is cut off after less than 10 ms: the recording is too short")
+        raise InputError(f"{name}: the tap is cut off after less than 10 ms: the recording is too short"
+                         + _read_notes(rec))
     pre = -o.pre_onset_s
     n_disp = seg_n + int(round(o.pre_onset_s * fs))
     n_fft = fft_length(n_disp, fs, o.max_bin_hz)
@@ -222,9 +223,16 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
     return mono, taps, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor
 
 
+def _read_notes(rec: Recording) -> str:
+    """What reading the file found (a WAV cut short), to end an error message with ('' if nothing)."""
+    prefix = f"{rec.name}: "
+    return "".join(f"; {w.removeprefix(prefix)}" for w in rec.warnings)
+
+
 def _unusable(rec: Recording) -> str:
-    """Why a recording without a usable tap may hold none: too low a rate, an overloaded input ('' if neither)."""
-    why = []
+    """Why a recording without a usable tap may hold none: cut short, too low a rate, an
+    overloaded input ('' if none of these)."""
+    why = [w.removeprefix(f"{rec.name}: ") for w in rec.warnings]
     fs = rec.sample_rate
     if fs < RECOMMENDED_SAMPLE_RATE:
         why.append(f"its sample rate is {fs} Hz, so its spectrum ends at {fs / 2:g} Hz, below what a tap analysis "
@@ -416,7 +424,8 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     if not peaks:
         why = _unusable(recording)
         raise InputError(f"{name}: no spectral peak stands out of the noise" + (f": {why}" if why else ""))
-    warnings = _tap_warnings(r["taps"], name, o)
+    # What reading found (a WAV cut short) first, then the taps'.
+    warnings = list(recording.warnings) + _tap_warnings(r["taps"], name, o)
     bands, w = interface_bands(interface, o.band_table)
     if w:
         warnings.append(w)
