@@ -35,7 +35,7 @@ def run(args) -> int:
     output_path(args.plot, "plot", library=args.library, inputs=command_inputs(args))
     assembly = load_assembly(args.assembly)
     entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
-    warnings = list(assembly.warnings)
+    warnings = list(entry.warnings) + list(assembly.warnings)
     if assembly.holder.name != entry.name:
         warnings.append(
             f"{args.assembly}: its holder is '{assembly.holder.name}', predicting with the contact of library holder '{entry.name}'"

@@ -111,7 +111,7 @@ def check_holder(recording, assembly, holder: str, library=None, save: bool = Tr
     lib = library if isinstance(library, HolderLibrary) else HolderLibrary(default_library_path(library))
     entry = entry or lib.get(holder)
     options = entry.options()
-    warnings = list(assembly.warnings)
+    warnings = list(entry.warnings) + list(assembly.warnings)
     if assembly.holder.name != entry.name:
         warnings.append(f"{assembly.source}: its holder is '{assembly.holder.name}', checking against library "
                         f"holder '{entry.name}'")

@@ -44,7 +44,7 @@ def test_a_library_with_one_out_of_range_holder_reads_with_one_warning_naming_it
     assert entries["A"].warnings == ()
     (warning,) = entries["B"].warnings
     assert warning.startswith(f"{old_library}: holder 'B': [holder] segments[1].length (1e+09 mm) is implausible")
-    assert "taptune library remove 'B'" in warning
+    assert "taptune library remove 'B'" in warning and "\n" not in warning
     # The good holder predicts; the implausible one refuses with the same one-line reason.
     record = make_record()
     assert entries["A"].assembly(record.tool, record.stickout_mm).stickout == pytest.approx(0.0535)
@@ -97,3 +97,11 @@ def test_a_structural_problem_still_refuses_the_file_naming_the_key(old_library)
     old_library.write_text(json.dumps(doc))
     with pytest.raises(LibraryFormatError, match=r"holder 'A': holder.segments\[1\].length must be a finite number"):
         HolderLibrary(old_library).entries()
+
+
+def test_predicting_with_the_out_of_range_holder_uses_the_assembly_file_and_warns(old_library, reference_toml, capsys):
+    # The contact parameters of 'B' are sound; the assembly file gives the geometry.
+    assert main(["predict", str(reference_toml), "--holder", "B", "--library", str(old_library)]) == 0
+    out, err = capsys.readouterr()
+    assert "f1 [Hz]" in out
+    assert err.count(f"warning: {old_library}: holder 'B': [holder] segments[1].length (1e+09 mm) is implausible") == 1
