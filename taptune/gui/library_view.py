@@ -46,8 +46,10 @@ def entry_html(entry) -> str:
         f"f = {', '.join(f'{f:,.0f}' for f in r.bending_measured_hz)} Hz, objective {r.objective:.3g}</li>"
         for r in entry.identifications
     )
+    # What reading found implausible but kept (geometry an older taptune saved).
+    warnings = "".join(f"<p style='color:#b00020'>⚠ {e(w)}</p>" for w in getattr(entry, "warnings", ()))
     return (
-        f"<h3>{e(entry.name)}</h3>"
+        f"<h3>{e(entry.name)}</h3>{warnings}"
         f"<p>Interface {e(entry.interface)}; clamp length {h.get('clamp_length', 0):g} mm; "
         f"segments (length×Ø outer/inner, mm): {e(segments)}</p>"
         f"<p><b>Parameters</b> ({len(entry.param_sets)} near-optimal sets)</p>"
@@ -146,7 +148,12 @@ class LibraryView(QWidget):
                       (entry.last_identified or "–").replace("T", " ").rstrip("Z"),
                       checks[-1].verdict if checks else "–")
             for c, text in enumerate(values):
-                self.table.setItem(r, c, QTableWidgetItem(text))
+                item = QTableWidgetItem(text)
+                if entry.warnings:
+                    item.setToolTip("\n".join(entry.warnings))
+                    if c == 0:
+                        item.setText(f"⚠ {text}")
+                self.table.setItem(r, c, item)
         if not self.entries:
             self.details.setHtml("<p>The library is empty: identify a holder and save it, or import a library file.</p>")
         elif self.table.currentRow() < 0:
