@@ -187,11 +187,19 @@ def _with_flute_ratio(asm, delta):
 
 
 @functools.lru_cache(maxsize=32)
-def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3) -> dict:
+def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3,
+                           base_hz: tuple[float, ...] | None = None) -> dict:
     """Relative change of f1..fn [–] per stated tolerance, by central differences.
 
     Cached: an identified assembly's sensitivities serve every prediction from it
     (all arguments are frozen, hashable values).
+
+    Parameters
+    ----------
+    base_hz : tuple of float, optional
+        f1..fn [Hz] of ``assembly`` with ``params`` on the full model with
+        ``model_options``, when the caller has solved them already (a prediction has): the
+        differences are divided by them instead of building and solving that model again.
 
     Returns
     -------
@@ -219,15 +227,19 @@ def relative_sensitivities(assembly, params, tolerances: Tolerances, model_optio
         if up is None or down is None:
             continue
         if base is None:
-            base = freqs(assembly)
+            base = freqs(assembly) if base_hz is None else np.asarray(base_hz, dtype=float)
         out[name] = (freqs(up) - freqs(down)) / 2 / base
     return out
 
 
 def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz) -> tuple[np.ndarray, dict]:
-    """The geometry component [Hz] per mode and its parts (see the module docstring)."""
+    """The geometry component [Hz] per mode and its parts (see the module docstring).
+
+    ``bending_hz`` are the full model's f1..fn [Hz] of ``assembly`` with ``params`` (the
+    prediction's best set): they also serve as the base of its sensitivities.
+    """
     f = np.asarray(bending_hz, dtype=float)
-    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size)
+    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size, tuple(map(float, f)))
     parts = {}
     if "stickout" in pred:
         parts["stickout"] = np.abs(pred["stickout"]) * f
