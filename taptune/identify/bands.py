@@ -232,11 +232,14 @@ def relative_sensitivities(assembly, params, tolerances: Tolerances, model_optio
     return out
 
 
-def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz) -> tuple[np.ndarray, dict]:
+def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz,
+                  identified_hz=None) -> tuple[np.ndarray, dict]:
     """The geometry component [Hz] per mode and its parts (see the module docstring).
 
     ``bending_hz`` are the full model's f1..fn [Hz] of ``assembly`` with ``params`` (the
     prediction's best set): they also serve as the base of its sensitivities.
+    ``identified_hz``, when given, are those of each identified assembly (what the
+    identification's full-model check solved): the base of theirs.
     """
     f = np.asarray(bending_hz, dtype=float)
     pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size, tuple(map(float, f)))
@@ -244,7 +247,8 @@ def geometry_term(assembly, params, identified, tolerances: Tolerances, model_op
     if "stickout" in pred:
         parts["stickout"] = np.abs(pred["stickout"]) * f
     if identified:
-        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size) for a in identified]
+        bases = _identified_bases(identified, identified_hz, f.size)
+        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size, b) for a, b in zip(identified, bases)]
         so = [s["stickout"] for s in ids if "stickout" in s]
         if so:
             # Independent ruler errors, one per recording: their mean error enters.
@@ -255,6 +259,15 @@ def geometry_term(assembly, params, identified, tolerances: Tolerances, model_op
                 parts[name] = np.min(np.abs(diffs), axis=0) * f
     total = np.sqrt(sum(v ** 2 for v in parts.values())) if parts else np.zeros_like(f)
     return total, parts
+
+
+def _identified_bases(identified, identified_hz, n_modes: int) -> list:
+    """Per identified assembly, its f1..fn [Hz] as a hashable tuple, or None when not
+    known for exactly these modes (the sensitivities then solve them)."""
+    if identified_hz is None or len(identified_hz) != len(identified):
+        return [None] * len(identified)
+    return [tuple(map(float, hz)) if len(hz) == n_modes and all(x is not None for x in hz) else None
+            for hz in identified_hz]
 
 
 def delta_stickout_mm(assembly, identified) -> float | None:

@@ -13,7 +13,7 @@ import taptune.model
 from taptune.identify import predict
 from taptune.identify.bands import relative_sensitivities
 from taptune.io.assembly import Tolerances
-from taptune.model import ModelOptions
+from taptune.model import ModelOptions, build_model, solve_modes
 from taptune.model.params import NOMINAL
 
 SETS = [NOMINAL, replace(NOMINAL, k_tt=NOMINAL.k_tt * 1.3, alpha=-5.0)]
@@ -48,3 +48,37 @@ def test_prediction_builds_the_predicted_assembly_once(reference_assembly, monke
     # the identified assembly's base once more (its frequencies are not known here).
     assert built.count(target) == 1
     assert len(built) == 1 + 6 + 7
+
+
+def test_identified_frequencies_spare_their_solves_bit_for_bit(reference_assembly):
+    # What identify's full-model check stores as bending_model_hz: the identified assembly
+    # solved with the best set on the default model.
+    identified = [reference_assembly, reference_assembly.with_stickout(0.0595)]
+    known = [tuple(map(float, solve_modes(build_model(a), SETS[0], n_modes=3).frequency_hz[:3])) for a in identified]
+    target = reference_assembly.with_stickout(0.0695)
+    old = predict(SETS, target, identified=identified, tolerances=TOL)
+    new = predict(SETS, target, identified=identified, tolerances=TOL, identified_hz=known)
+    assert new.to_dict() == old.to_dict()
+    assert new.band.geometry_parts_hz == old.band.geometry_parts_hz and new.band.half_width_hz == old.band.half_width_hz
+    # Frequencies of other modes than predicted, or a mode not known, are not used.
+    two = predict(SETS[:1], target, n_modes=2, identified=identified[:1], tolerances=TOL, identified_hz=known[:1])
+    assert two.band.geometry_parts_hz == predict(SETS[:1], target, n_modes=2, identified=identified[:1],
+                                                  tolerances=TOL).band.geometry_parts_hz
+
+
+def test_outlook_builds_no_identified_base(reference_assembly, monkeypatch):
+    identified = reference_assembly.with_stickout(0.0505)  # stick-outs no other test caches
+    known = [tuple(map(float, solve_modes(build_model(identified), SETS[0], n_modes=3).frequency_hz[:3]))]
+    target = reference_assembly.with_stickout(0.0705)
+    built = []
+    original = taptune.model.build_model
+
+    def counting(assembly, *args, **kwargs):
+        built.append(assembly)
+        return original(assembly, *args, **kwargs)
+
+    monkeypatch.setattr(taptune.model, "build_model", counting)
+    predict(SETS, target, identified=[identified], tolerances=TOL, identified_hz=known)
+    # The target once, six ± tolerance moves of each assembly; neither base again.
+    assert built.count(target) == 1 and identified not in built
+    assert len(built) == 1 + 6 + 6
