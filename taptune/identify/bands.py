@@ -187,11 +187,19 @@ def _with_flute_ratio(asm, delta):
 
 
 @functools.lru_cache(maxsize=32)
-def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3) -> dict:
+def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3,
+                           base_hz: tuple[float, ...] | None = None) -> dict:
     """Relative change of f1..fn [–] per stated tolerance, by central differences.
 
     Cached: an identified assembly's sensitivities serve every prediction from it
     (all arguments are frozen, hashable values).
+
+    Parameters
+    ----------
+    base_hz : tuple of float, optional
+        f1..fn [Hz] of ``assembly`` with ``params`` on the full model with
+        ``model_options``, when the caller has solved them already (a prediction has): the
+        differences are divided by them instead of building and solving that model again.
 
     Returns
     -------
@@ -219,20 +227,28 @@ def relative_sensitivities(assembly, params, tolerances: Tolerances, model_optio
         if up is None or down is None:
             continue
         if base is None:
-            base = freqs(assembly)
+            base = freqs(assembly) if base_hz is None else np.asarray(base_hz, dtype=float)
         out[name] = (freqs(up) - freqs(down)) / 2 / base
     return out
 
 
-def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz) -> tuple[np.ndarray, dict]:
-    """The geometry component [Hz] per mode and its parts (see the module docstring)."""
+def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz,
+                  identified_hz=None) -> tuple[np.ndarray, dict]:
+    """The geometry component [Hz] per mode and its parts (see the module docstring).
+
+    ``bending_hz`` are the full model's f1..fn [Hz] of ``assembly`` with ``params`` (the
+    prediction's best set): they also serve as the base of its sensitivities.
+    ``identified_hz``, when given, are those of each identified assembly (what the
+    identification's full-model check solved): the base of theirs.
+    """
     f = np.asarray(bending_hz, dtype=float)
-    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size)
+    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size, tuple(map(float, f)))
     parts = {}
     if "stickout" in pred:
         parts["stickout"] = np.abs(pred["stickout"]) * f
     if identified:
-        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size) for a in identified]
+        bases = _identified_bases(identified, identified_hz, f.size)
+        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size, b) for a, b in zip(identified, bases)]
         so = [s["stickout"] for s in ids if "stickout" in s]
         if so:
             # Independent ruler errors, one per recording: their mean error enters.
@@ -243,6 +259,15 @@ def geometry_term(assembly, params, identified, tolerances: Tolerances, model_op
                 parts[name] = np.min(np.abs(diffs), axis=0) * f
     total = np.sqrt(sum(v ** 2 for v in parts.values())) if parts else np.zeros_like(f)
     return total, parts
+
+
+def _identified_bases(identified, identified_hz, n_modes: int) -> list:
+    """Per identified assembly, its f1..fn [Hz] as a hashable tuple, or None when not
+    known for exactly these modes (the sensitivities then solve them)."""
+    if identified_hz is None or len(identified_hz) != len(identified):
+        return [None] * len(identified)
+    return [tuple(map(float, hz)) if len(hz) == n_modes and all(x is not None for x in hz) else None
+            for hz in identified_hz]
 
 
 def delta_stickout_mm(assembly, identified) -> float | None:
