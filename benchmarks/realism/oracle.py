@@ -98,7 +98,7 @@ def fit_frequencies(assemblies, targets_hz, modes=MODES, starts: int = STARTS, s
     list of dict
         Per start, best first: ``u`` (unit-cube optimum), ``misfit`` (RMS of
         log(f_model / f_target) over the fitted frequencies), ``start`` (its index; the
-        extra starts first), ``nfev``.
+        extra starts first), ``u0`` (the start), ``nfev``.
     """
     from scipy.optimize import least_squares
 
@@ -122,7 +122,7 @@ def fit_frequencies(assemblies, targets_hz, modes=MODES, starts: int = STARTS, s
                               xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=400)
         except (np.linalg.LinAlgError, ValueError):
             continue
-        out.append({"u": r.x, "misfit": float(np.sqrt(np.mean(r.fun**2))), "start": k, "nfev": int(r.nfev)})
+        out.append({"u": r.x, "misfit": float(np.sqrt(np.mean(r.fun**2))), "start": k, "u0": u0, "nfev": int(r.nfev)})
     return sorted(out, key=lambda s: s["misfit"])
 
 
@@ -139,11 +139,16 @@ def _valley(fits: list[dict]) -> list[dict]:
 
 
 def _pick(fits: list[dict], from_pipeline: bool) -> dict:
-    """The oracle's member: the fit started from the pipeline's best set (the exact fit
-    nearest the pipeline's choice inside the valley), else the lowest misfit."""
-    if from_pipeline:
-        return next((f for f in fits if f["start"] == 0), fits[0])
-    return fits[0]
+    """The oracle's member: the exact fit nearest the pipeline's choice inside the valley
+    (the fit started from the pipeline's best set; when that start ends in a worse local
+    minimum, the valley member nearest the start), else the lowest misfit."""
+    members = _valley(fits)
+    start = next((f for f in fits if f["start"] == 0), None) if from_pipeline else None
+    if start is None:
+        return fits[0]
+    if any(f is start for f in members):
+        return start
+    return min(members, key=lambda f: float(np.linalg.norm(f["u"] - start["u0"])))
 
 
 def _predict_all(fits, at_assemblies, truths, from_pipeline: bool) -> dict:
@@ -235,9 +240,10 @@ def oracle_case(split: str, index: int, tier: str, record: dict | None = None, s
                  "ruler_pct": round(100 * (q.ruler_hz[n - 1] / q_truth[k][n - 1] - 1), 5),
                  "measured": None if measured is None else bool(measured[n - 1])}
             for v, r in res.items():
-                p[v] = {"error_pct": round(float(r["error"][k, n - 1]), 5),
-                        "valley_pct": [round(float(r["low"][k, n - 1]), 5), round(float(r["high"][k, n - 1]), 5)],
-                        "chosen_pct": round(float(r["chosen"][k, n - 1]), 5)}
+                p[v] = {"error_pct": round(float(r["error"][k, n - 1]), 4)}
+                if not v.startswith("floor"):  # one member: its valley is the prediction itself
+                    p[v].update(valley_pct=[round(float(r["low"][k, n - 1]), 4), round(float(r["high"][k, n - 1]), 4)],
+                                chosen_pct=round(float(r["chosen"][k, n - 1]), 4))
             if (q.stickout_mm, n) in pipe:
                 pp = pipe[(q.stickout_mm, n)]
                 p["pipeline"] = {"error_pct": pp["error_pct"], "half_width_pct": pp["half_width_pct"],
@@ -275,6 +281,8 @@ def summarise(records: list[dict]) -> dict:
         for v in VARIANTS:
             ps = [p for p in sel if v in p]
             b[v] = _stats([p[v]["error_pct"] for p in ps])
+            if v.startswith("floor"):
+                continue
             b[v + "_valley_worst"] = _stats([max(abs(x) for x in p[v]["valley_pct"]) for p in ps])
             b[v + "_chosen"] = _stats([p[v]["chosen_pct"] for p in ps])
         pp = [p for p in sel if "pipeline" in p]
@@ -318,6 +326,19 @@ def print_summary(s: dict, title: str) -> None:
         print(f"{name:30s} {a['n']:4d} {cell(a)} | {me.get('n', 0):6d} {cell(me)} | {modes} | {a['share_le_0.4']:6.0%}")
 
 
+def _compact(record: dict) -> dict:
+    """A case record as :func:`oracle_case` writes it now (4 decimals; the one-member
+    floor fits without valley), for records of earlier runs."""
+    for p in record["predictions"]:
+        for v in VARIANTS:
+            if v in p:
+                e = p[v]
+                p[v] = {"error_pct": round(e["error_pct"], 4)}
+                if not v.startswith("floor"):
+                    p[v].update(valley_pct=[round(x, 4) for x in e["valley_pct"]], chosen_pct=round(e["chosen_pct"], 4))
+    return record
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", default="validation", choices=("calibration", "validation", "infamily"))
@@ -327,10 +348,21 @@ def main(argv=None) -> int:
     ap.add_argument("--starts", type=int, default=STARTS, help="least-squares starts per fit")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--out", default=None, help="results JSON")
+    ap.add_argument("--indices", default=None, help="comma-separated case indices instead of --start/--n")
+    ap.add_argument("--update", default=None, metavar="JSON",
+                    help="replace these cases in an oracle results JSON and recompute its summary")
+    ap.add_argument("--summary", default=None, metavar="JSON", help="only print the summary of an oracle results JSON")
     args = ap.parse_args(argv)
+    if args.summary:
+        data = json.load(open(args.summary, encoding="utf-8"))
+        print_summary(summarise(data["cases"]), f"{data['meta']['tier']} tier, {data['meta']['split']}")
+        return 0
     t0 = time.time()
     pipe = pipeline_records(args.tier, args.split)
-    idx = list(range(args.start, args.start + args.n))
+    if args.indices:
+        idx = [int(i) for i in args.indices.split(",")]
+    else:
+        idx = list(range(args.start, args.start + args.n))
     recs = [pipe.get(i) for i in idx]
     args_ = ([args.split] * len(idx), idx, [args.tier] * len(idx), recs, [args.starts] * len(idx))
     if args.jobs > 1:
@@ -341,6 +373,16 @@ def main(argv=None) -> int:
     for r in records:
         print(f"{r['name']:28s} misfit {r['fit']['misfit_pct']:.3f} %  valley {r['fit']['valley']:2d}  err% "
               + " ".join(f"{p['ruler']['error_pct']:+.2f}" for p in r["predictions"]) + f"  cpu {r['cpu_s']} s", flush=True)
+    if args.update:
+        data = json.load(open(args.update, encoding="utf-8"))
+        new = {r["index"]: r for r in records}
+        data["cases"] = [_compact(new.get(r["index"], r)) for r in data["cases"]]
+        data["meta"]["updated_indices"] = sorted(set(data["meta"].get("updated_indices", [])) | set(new))
+        data["summary"] = summarise(data["cases"])
+        print_summary(data["summary"], f"{args.tier} tier, {args.split} (updated {args.update})")
+        with open(args.update, "w", encoding="utf-8") as fh:
+            json.dump(data, fh, separators=(",", ":"))
+        return 0
     summary = summarise(records)
     print_summary(summary, f"{args.tier} tier, {args.split}")
     print(f"wall {time.time() - t0:.0f} s with {args.jobs} job(s)")
