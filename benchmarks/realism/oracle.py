@@ -13,10 +13,13 @@ model and the description errors (profile, diameters, flute, hidden mass, double
 ruler) cost.
 
 Three frequencies do not fix seven parameters (MODEL.md §8.6): the exact fits form a
-valley. The oracle's prediction is the fit of lowest misfit; ``valley`` gives the
-spread of the predictions over every start that fits about as well (misfit within
-``VALLEY_TOL`` of the best), and the per-case best of them (a perfect choice inside the
-valley, the floor of any selection rule).
+valley, and their predictions at other stick-outs differ (by up to 10 % even in the
+in-family control). The oracle's prediction is the exact fit nearest the pipeline's own
+choice (the fit started from the pipeline's best parameter set, else the valley member
+nearest that start; the lowest misfit when the pipeline failed). ``valley_pct`` gives
+the range of the predictions over every start that fits about as well (misfit within
+``VALLEY_TOL`` of the best), ``chosen_pct`` the per-case best of them (a perfect choice
+inside the sampled valley: the floor of any selection rule).
 
 Variants (every prediction carries all of them, in % of the truth):
 
@@ -26,7 +29,14 @@ Variants (every prediction carries all of them, in % of the truth):
 * ``exact``    fit at the TRUE recorded stick-out, predict at the TRUE query stick-out
   (the stick-out error removed on both sides; the rest of the description stays);
 * ``fit_measured`` fit only the modes the real pipeline measured (its results record's
-  ``identification.bending_measured_hz``), predict as ``ruler``.
+  ``identification.bending_measured_hz``), predict as ``ruler``;
+* ``floor``    ONE parameter set fitted to the truth at the recording AND at the queries
+  (described geometry, ruler-read stick-outs): what the best conceivable identification
+  could do with this model and this description;
+* ``floor_exact`` the same with every stick-out exact.
+
+``ruler_pct`` (from the corpus) is how far the ruler error at the query alone moves the
+true holder: a perfect model fed the ruler-read stick-out errs by that much.
 
 Run::
 
@@ -172,7 +182,7 @@ def _predict_all(fits, at_assemblies, truths, from_pipeline: bool) -> dict:
 def pipeline_records(tier: str, split: str) -> dict:
     """The real pipeline's results records of ``tier``/``split`` by case index
     (``results_<tier>_<split>*.json``; in-family: ``results_infamily*.json``)."""
-    pattern = f"results_infamily*.json" if split == "infamily" else f"results_{tier}_{split}*.json"
+    pattern = "results_infamily*.json" if split == "infamily" else f"results_{tier}_{split}*.json"
     out = {}
     for path in sorted(glob.glob(os.path.join(HERE, pattern))):
         data = json.load(open(path, encoding="utf-8"))
