@@ -135,8 +135,17 @@ def key_of(r, per_mode: bool) -> str:
     return f"{r['group']}/{r['mode']}" if per_mode else r["group"]
 
 
-def calibrate(rows_, delta_ref=bands.DELTA_REF_MM, per_mode=False, set_scale=1.0) -> dict:
-    """Mondrian split-conformal c per group (or per group and mode: keys ``group/mode``)."""
+def calibrate(rows_, delta_ref=bands.DELTA_REF_MM, per_mode=False, set_scale=1.0, by_tier=False) -> dict:
+    """Mondrian split-conformal c per group (or per group and mode: keys ``group/mode``).
+
+    ``by_tier``: calibrated on each corpus tier alone and the largest c of the tiers
+    kept, so that each tier's holders are covered (pooled, the easier tier's many small
+    errors let the harder tier's go uncovered).
+    """
+    if by_tier:
+        per = [calibrate([r for r in rows_ if r["tier"] == t], delta_ref, per_mode, set_scale)
+               for t in sorted({r["tier"] for r in rows_})]
+        return {k: max(c.get(k, 0.0) for c in per) for k in sorted(set().union(*per))}
     scores: dict[str, list] = {}
     for r in rows_:
         scores.setdefault(key_of(r, per_mode), []).append(need(r, delta_ref, set_scale))
@@ -198,13 +207,13 @@ def by_set(rows_) -> dict[str, list]:
 DELTA_REFS = (5.0, 10.0, 20.0, 40.0)
 
 
-def fit_delta_ref(cal) -> tuple[float, dict]:
+def fit_delta_ref(cal, by_tier: bool = False) -> tuple[float, dict]:
     """Δref of the growth 1 + Δ/Δref, fitted on the calibration rows: the one of
     :data:`DELTA_REFS` whose conformal c give the smallest median half-width there
     (coverage ≥ 90 % per group holds for every Δref by construction). Returns (Δref, c)."""
     best = None
     for d in DELTA_REFS:
-        c = calibrate(cal, delta_ref=d)
+        c = calibrate(cal, delta_ref=d, by_tier=by_tier)
         h = stats(cal, c, delta_ref=d)["half_median_pct"]
         print(f"  Δref {d:g} mm: median half-width {h:.3f} %, c = "
               + ", ".join(f"{k} {100 * v:.3f} %" for k, v in c.items()))
@@ -217,13 +226,16 @@ def variants(cal, val) -> None:
     """Other band forms: calibrated on ``cal``, measured on ``val`` (reported, not used unless chosen)."""
     print("\nvariants (calibrated on the records, measured on the validation records):")
     forms = [("per group, Δref 10 mm (bands.py form)", dict(delta_ref=10.0)),
-             ("per group and mode, Δref 10 mm", dict(delta_ref=10.0, per_mode=True))]
+             ("per group and mode, Δref 10 mm", dict(delta_ref=10.0, per_mode=True)),
+             ("per group, pooled tiers (not --by-tier)", dict(delta_ref=bands.DELTA_REF_MM)),
+             ("per group, largest of the tiers (--by-tier)", dict(delta_ref=bands.DELTA_REF_MM, by_tier=True))]
     for d in (5.0, 20.0, 40.0, math.inf):  # ∞: no growth with the stick-out change
         forms.append((f"per group, Δref {d:g} mm", dict(delta_ref=d)))
     for s in (0.5, 0.0):
         forms.append((f"per group, set part × {s:g}", dict(delta_ref=10.0, set_scale=s)))
     for name, kw in forms:
         c = calibrate(cal, **kw)
+        kw.pop("by_tier", None)
         print(f"  {name}: c = {', '.join(f'{k} {100 * v:.3f} %' for k, v in c.items())}")
         print("    " + line("calibration (in-sample)", stats(cal, c, **kw)))
         for title, rs in by_set(val).items():
@@ -251,6 +263,8 @@ def main(argv=None) -> int:
     ap.add_argument("--validate", nargs="*", default=[], help="results JSONs to measure on (never calibrated on)")
     ap.add_argument("--write", action="store_true", help="write the calibrated constants into bands.py")
     ap.add_argument("--variants", action="store_true", help="also print the other band forms tried")
+    ap.add_argument("--by-tier", action="store_true", help="calibrate each tier alone and keep the largest c "
+                                                            "per group (every tier covered, not only the pool)")
     ap.add_argument("--cache", help="a JSON file keeping the per-prediction rows of each results file "
                                      "(by path, size and time): a second run skips the re-prediction")
     args = ap.parse_args(argv)
@@ -260,7 +274,7 @@ def main(argv=None) -> int:
     for title, rs in by_set(cal + val).items():
         print("  " + line(title, stats(rs, ZERO)))
     print("\nthe stick-out-change growth 1 + Δ/Δref, fitted on the calibration records:")
-    delta_ref, c = fit_delta_ref(cal)
+    delta_ref, c = fit_delta_ref(cal, args.by_tier)
     print(f"\nMondrian split-conformal c per group (90 %), Δref {delta_ref:g} mm, on "
           f"{len(cal)} predictions: " + ", ".join(f"{k} {v:.5f} (n {sum(r['group'] == k for r in cal)})"
                                                    for k, v in c.items()))
@@ -276,7 +290,8 @@ def main(argv=None) -> int:
         tiers = " + ".join(sorted({r["tier"] for r in cal}))
         n_cases = len({r["case"] for r in cal})
         note = (f"realism corpus, {tiers} tiers: {n_cases} holders, {len(cal)} predictions; "
-                f"Mondrian split-conformal 90 % per evidence group")
+                f"Mondrian split-conformal 90 % per evidence group"
+                + (", the largest of the tiers" if args.by_tier else ""))
         write_constants(c, delta_ref, note)
     return 0
 
