@@ -257,9 +257,32 @@ def write_constants(c: dict, delta_ref: float, note: str) -> None:
     print(f"wrote MODEL_FORM = {{{body}}}, DELTA_REF_MM = {ref} into {path}")
 
 
+def rewrite_results(paths) -> None:
+    """Redo the stored predictions of results JSONs with the bands now in bands.py (run after
+    ``--write``, in a new process), as :func:`benchmarks.realism.run.run_case` predicts:
+    their ``covered`` and half-widths, and their summaries, then say what the shipped bands do."""
+    from benchmarks.realism.corpus import case_of
+    from benchmarks.realism.run import reevaluate, summarise, write_results
+
+    for p in paths:
+        data = json.loads(Path(p).read_text())
+
+        def band(sets, asm, rec):
+            return predict(sets, asm, relative_floor=rec["identification"]["relative_floor"],
+                           identified=[case_of(rec).described],
+                           measured_modes=bands.measured_modes([rec["identification"]["bending_measured_hz"]]))
+
+        data["cases"] = reevaluate(data["cases"], band)
+        data["summary"] = summarise(data["cases"])
+        data["meta"]["bands"] = f"MODEL_FORM {bands.MODEL_FORM}, DELTA_REF_MM {bands.DELTA_REF_MM:g}"
+        write_results(p, data)
+        t = data["summary"]["transfer"]
+        print(f"{p}: coverage {t['coverage']:.1%}, median ± {t['half_width_median_pct']:.2f} %")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--records", nargs="+", required=True, help="results JSONs to calibrate on")
+    ap.add_argument("--records", nargs="+", default=[], help="results JSONs to calibrate on")
     ap.add_argument("--validate", nargs="*", default=[], help="results JSONs to measure on (never calibrated on)")
     ap.add_argument("--write", action="store_true", help="write the calibrated constants into bands.py")
     ap.add_argument("--variants", action="store_true", help="also print the other band forms tried")
@@ -267,7 +290,14 @@ def main(argv=None) -> int:
                                                             "per group (every tier covered, not only the pool)")
     ap.add_argument("--cache", help="a JSON file keeping the per-prediction rows of each results file "
                                      "(by path, size and time): a second run skips the re-prediction")
+    ap.add_argument("--rewrite-results", nargs="+", metavar="JSON",
+                    help="only redo the predictions of these results JSONs with the bands now in bands.py")
     args = ap.parse_args(argv)
+    if args.rewrite_results:
+        rewrite_results(args.rewrite_results)
+        return 0
+    if not args.records:
+        ap.error("--records is required (or --rewrite-results)")
     cal = cached_rows(args.records, args.cache)
     val = cached_rows(args.validate, args.cache) if args.validate else []
     print("set + geometry only:")
