@@ -37,10 +37,12 @@ of 24 each, under the 200 kB limit); validation: 48 per tier::
     python -m benchmarks.realism.run --split infamily --n 12 --jobs 2 --out $R/results_infamily.json
     python benchmarks/calibrate_bands.py --records $R/results_*_calibration*.json \
         --validate $R/results_issue_validation*.json $R/results_harsh_validation*.json $R/results_infamily.json \
-        --cache /tmp/taptune-band-rows.json --write [--variants]
+        --cache /tmp/taptune-band-rows.json --by-tier --write [--variants]
+    python benchmarks/calibrate_bands.py --rewrite-results $R/results_*.json
     python -m pytest tests/identify/test_bands.py tests/realism
 
-``--write`` puts MODEL_FORM, DELTA_REF_MM and CALIBRATION into bands.py; the comment above
+``--by-tier`` calibrates each tier alone and keeps the larger c (the shipped choice: each
+tier covered, not only the pool). ``--write`` puts MODEL_FORM, DELTA_REF_MM and CALIBRATION into bands.py; the comment above
 MODEL_FORM and the numbers in docs/physics.md §5 are then updated by hand from the printout
 (the ``(validation)`` lines). Re-measure the harsh tier too: the best fits may stay the
 same while the near-optimal sets (the band's set part and the groups) change with the code.
@@ -135,8 +137,17 @@ def key_of(r, per_mode: bool) -> str:
     return f"{r['group']}/{r['mode']}" if per_mode else r["group"]
 
 
-def calibrate(rows_, delta_ref=bands.DELTA_REF_MM, per_mode=False, set_scale=1.0) -> dict:
-    """Mondrian split-conformal c per group (or per group and mode: keys ``group/mode``)."""
+def calibrate(rows_, delta_ref=bands.DELTA_REF_MM, per_mode=False, set_scale=1.0, by_tier=False) -> dict:
+    """Mondrian split-conformal c per group (or per group and mode: keys ``group/mode``).
+
+    ``by_tier``: calibrated on each corpus tier alone and the largest c of the tiers
+    kept, so that each tier's holders are covered (pooled, the easier tier's many small
+    errors let the harder tier's go uncovered).
+    """
+    if by_tier:
+        per = [calibrate([r for r in rows_ if r["tier"] == t], delta_ref, per_mode, set_scale)
+               for t in sorted({r["tier"] for r in rows_})]
+        return {k: max(c.get(k, 0.0) for c in per) for k in sorted(set().union(*per))}
     scores: dict[str, list] = {}
     for r in rows_:
         scores.setdefault(key_of(r, per_mode), []).append(need(r, delta_ref, set_scale))
@@ -198,13 +209,13 @@ def by_set(rows_) -> dict[str, list]:
 DELTA_REFS = (5.0, 10.0, 20.0, 40.0)
 
 
-def fit_delta_ref(cal) -> tuple[float, dict]:
+def fit_delta_ref(cal, by_tier: bool = False) -> tuple[float, dict]:
     """Δref of the growth 1 + Δ/Δref, fitted on the calibration rows: the one of
     :data:`DELTA_REFS` whose conformal c give the smallest median half-width there
     (coverage ≥ 90 % per group holds for every Δref by construction). Returns (Δref, c)."""
     best = None
     for d in DELTA_REFS:
-        c = calibrate(cal, delta_ref=d)
+        c = calibrate(cal, delta_ref=d, by_tier=by_tier)
         h = stats(cal, c, delta_ref=d)["half_median_pct"]
         print(f"  Δref {d:g} mm: median half-width {h:.3f} %, c = "
               + ", ".join(f"{k} {100 * v:.3f} %" for k, v in c.items()))
@@ -217,13 +228,16 @@ def variants(cal, val) -> None:
     """Other band forms: calibrated on ``cal``, measured on ``val`` (reported, not used unless chosen)."""
     print("\nvariants (calibrated on the records, measured on the validation records):")
     forms = [("per group, Δref 10 mm (bands.py form)", dict(delta_ref=10.0)),
-             ("per group and mode, Δref 10 mm", dict(delta_ref=10.0, per_mode=True))]
+             ("per group and mode, Δref 10 mm", dict(delta_ref=10.0, per_mode=True)),
+             ("per group, pooled tiers (not --by-tier)", dict(delta_ref=bands.DELTA_REF_MM)),
+             ("per group, largest of the tiers (--by-tier)", dict(delta_ref=bands.DELTA_REF_MM, by_tier=True))]
     for d in (5.0, 20.0, 40.0, math.inf):  # ∞: no growth with the stick-out change
         forms.append((f"per group, Δref {d:g} mm", dict(delta_ref=d)))
     for s in (0.5, 0.0):
         forms.append((f"per group, set part × {s:g}", dict(delta_ref=10.0, set_scale=s)))
     for name, kw in forms:
         c = calibrate(cal, **kw)
+        kw.pop("by_tier", None)
         print(f"  {name}: c = {', '.join(f'{k} {100 * v:.3f} %' for k, v in c.items())}")
         print("    " + line("calibration (in-sample)", stats(cal, c, **kw)))
         for title, rs in by_set(val).items():
@@ -245,22 +259,54 @@ def write_constants(c: dict, delta_ref: float, note: str) -> None:
     print(f"wrote MODEL_FORM = {{{body}}}, DELTA_REF_MM = {ref} into {path}")
 
 
+def rewrite_results(paths) -> None:
+    """Redo the stored predictions of results JSONs with the bands now in bands.py (run after
+    ``--write``, in a new process), as :func:`benchmarks.realism.run.run_case` predicts:
+    their ``covered`` and half-widths, and their summaries, then say what the shipped bands do."""
+    from benchmarks.realism.corpus import case_of
+    from benchmarks.realism.run import reevaluate, summarise, write_results
+
+    for p in paths:
+        data = json.loads(Path(p).read_text())
+
+        def band(sets, asm, rec):
+            return predict(sets, asm, relative_floor=rec["identification"]["relative_floor"],
+                           identified=[case_of(rec).described],
+                           measured_modes=bands.measured_modes([rec["identification"]["bending_measured_hz"]]))
+
+        data["cases"] = reevaluate(data["cases"], band)
+        data["summary"] = summarise(data["cases"])
+        data["meta"]["bands"] = f"MODEL_FORM {bands.MODEL_FORM}, DELTA_REF_MM {bands.DELTA_REF_MM:g}"
+        write_results(p, data)
+        t = data["summary"]["transfer"]
+        print(f"{p}: coverage {t['coverage']:.1%}, median ± {t['half_width_median_pct']:.2f} %")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--records", nargs="+", required=True, help="results JSONs to calibrate on")
+    ap.add_argument("--records", nargs="+", default=[], help="results JSONs to calibrate on")
     ap.add_argument("--validate", nargs="*", default=[], help="results JSONs to measure on (never calibrated on)")
     ap.add_argument("--write", action="store_true", help="write the calibrated constants into bands.py")
     ap.add_argument("--variants", action="store_true", help="also print the other band forms tried")
+    ap.add_argument("--by-tier", action="store_true", help="calibrate each tier alone and keep the largest c "
+                                                            "per group (every tier covered, not only the pool)")
     ap.add_argument("--cache", help="a JSON file keeping the per-prediction rows of each results file "
                                      "(by path, size and time): a second run skips the re-prediction")
+    ap.add_argument("--rewrite-results", nargs="+", metavar="JSON",
+                    help="only redo the predictions of these results JSONs with the bands now in bands.py")
     args = ap.parse_args(argv)
+    if args.rewrite_results:
+        rewrite_results(args.rewrite_results)
+        return 0
+    if not args.records:
+        ap.error("--records is required (or --rewrite-results)")
     cal = cached_rows(args.records, args.cache)
     val = cached_rows(args.validate, args.cache) if args.validate else []
     print("set + geometry only:")
     for title, rs in by_set(cal + val).items():
         print("  " + line(title, stats(rs, ZERO)))
     print("\nthe stick-out-change growth 1 + Δ/Δref, fitted on the calibration records:")
-    delta_ref, c = fit_delta_ref(cal)
+    delta_ref, c = fit_delta_ref(cal, args.by_tier)
     print(f"\nMondrian split-conformal c per group (90 %), Δref {delta_ref:g} mm, on "
           f"{len(cal)} predictions: " + ", ".join(f"{k} {v:.5f} (n {sum(r['group'] == k for r in cal)})"
                                                    for k, v in c.items()))
@@ -276,7 +322,8 @@ def main(argv=None) -> int:
         tiers = " + ".join(sorted({r["tier"] for r in cal}))
         n_cases = len({r["case"] for r in cal})
         note = (f"realism corpus, {tiers} tiers: {n_cases} holders, {len(cal)} predictions; "
-                f"Mondrian split-conformal 90 % per evidence group")
+                f"Mondrian split-conformal 90 % per evidence group"
+                + (", the largest of the tiers" if args.by_tier else ""))
         write_constants(c, delta_ref, note)
     return 0
 

@@ -184,8 +184,10 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
     max_peaks : int
         Keep at most this many, those standing highest above their ring.
     shoulder_prominence_db, shoulder_snr_db : float
-        A peak failing the ring test is kept with this prominence and this height
-        above ``floor`` (a mode on the skirt of a louder one).
+        A peak failing the ring test (a mode on the skirt of a louder one) is kept with
+        this prominence and either this height above ``floor`` or ``min_local_db`` above
+        the median of the lower of the ring's two sides (the side away from the louder
+        peak's skirt).
 
     Returns
     -------
@@ -217,15 +219,19 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
     hw = np.array([half_power_width(f, m, int(i)) for i in idx])
     ring = int(round(ring_hz / df))
     local = np.zeros(idx.size)
+    lower_side = np.full(idx.size, -np.inf)
     for k, i in enumerate(idx):
         w_in = max(int(np.ceil(4 * hw[k] / df)), 3)
         left = db[max(i - w_in - ring, 0):max(i - w_in, 0)]
         right = db[i + w_in:i + w_in + ring]
         around = np.concatenate([left, right])
         local[k] = db[i] - (np.median(around) if around.size else -np.inf)
+        if left.size and right.size:
+            lower_side[k] = db[i] - min(np.median(left), np.median(right))
     # Beside a much louder peak the ring median sits on its skirt: there a clear
-    # prominence far above the noise is enough.
-    keep = (local >= min_local_db) | ((prom >= shoulder_prominence_db) & (over >= shoulder_snr_db))
+    # prominence is enough far above the noise, or over the side away from the skirt.
+    keep = (local >= min_local_db) | ((prom >= shoulder_prominence_db)
+                                      & ((over >= shoulder_snr_db) | (lower_side >= min_local_db)))
     idx, prom, local, hw, over = idx[keep], prom[keep], local[keep], hw[keep], over[keep]
     if idx.size > max_peaks:
         top = np.sort(np.argsort(local)[::-1][:max_peaks])

@@ -11,14 +11,14 @@ from taptune.signal.peaks import Peak, fit_resonance, pick_faint_peaks
 
 from .synthetic import BENDING, expected_and_bounds, workshop_recording
 
-#: Mode 2 rendered ~12 dB over the local noise floor of the WORKSHOP recording (its
-#: relative height 0.09 instead of 0.6; measured 12.3-12.5 dB on seeds 0-2), well below
-#: the 15 dB the normal picking demands.
-FAINT_2 = (BENDING[0], (BENDING[1][0], BENDING[1][1], 0.09), BENDING[2])
+#: Mode 2 rendered ~10 dB over the local floor of the WORKSHOP recording (its relative
+#: height 0.06 instead of 0.6; 9.9-10.1 dB on seeds 0-1), below what the normal picking
+#: demands even of a peak on a skirt (at 0.09, ~11.5 dB, it is picked as a clear peak).
+FAINT_2 = (BENDING[0], (BENDING[1][0], BENDING[1][1], 0.06), BENDING[2])
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_faint_mode_12_db_over_the_noise_is_found_and_named(seed):
+def test_faint_mode_10_db_over_the_floor_is_found_and_named(seed):
     expected, bounds = expected_and_bounds()
     rec = workshop_recording(seed, modes=FAINT_2)
     plain = analyse_recording(rec, expected_hz=expected, bounds_hz=bounds,
@@ -27,7 +27,7 @@ def test_faint_mode_12_db_over_the_noise_is_found_and_named(seed):
     a = analyse_recording(rec, expected_hz=expected, bounds_hz=bounds)
     got = a.bending_by_mode()
     assert sorted(got) == [1, 2, 3]
-    assert got[2] == pytest.approx(BENDING[1][0], rel=1e-3)
+    assert got[2] == pytest.approx(BENDING[1][0], rel=1.5e-3)  # 10 dB up: ~0.1 %, hence 'less sure'
     mode2 = a.bending_peaks[1]
     assert mode2.reliability == "faint" and "faint" in mode2.note and 9.0 < mode2.snr_db < 16.0
     assert all(p.reliability == "clear" for p in a.bending_peaks if p.mode != 2)
