@@ -19,7 +19,12 @@ def holder_a(library_path, reference_assembly):
 
     from tests.gui.conftest import HOLDER_A
 
-    HolderLibrary(library_path).put(HolderEntry.create(reference_assembly.holder, HolderParams(**HOLDER_A)))
+    from tests.library.entries import make_record
+
+    # Identified at the reference stick-out, as a library holder is: its bands know Δ.
+    identified = make_record(stickout_mm=reference_assembly.stickout * 1e3)
+    HolderLibrary(library_path).put(HolderEntry.create(reference_assembly.holder, HolderParams(**HOLDER_A),
+                                                       identifications=(identified,)))
     return reference_assembly.holder.name
 
 
