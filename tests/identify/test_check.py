@@ -149,12 +149,15 @@ def test_the_same_holder_at_another_stickout_is_consistent(holder, stickout_mm):
     assert len(check.result.measured) >= 2
 
 
-def test_the_same_holder_far_from_the_identified_stickout_is_consistent(holder):
+def test_the_same_holder_far_from_the_identified_stickout_is_held_by_its_band(holder):
     """At 73.5 mm the one-tap identification misses f1 by 0.49 %: the prediction's own band
-    (±2.0 %: model form 1.6 % for 20 mm from the tap, the stick-out read to ±0.3 mm at both
-    taps 0.6 and 0.7 %) holds it, and the check adds nothing to that band."""
+    (±3.4 %: model form 3 × 1.07 % for 20 mm from the tap — the corpus's errors grow with
+    the stick-out change — and the stick-out read to ±0.3 mm at both taps) holds it, and the
+    check adds nothing to that band. So wide a band cannot tell a worn collet (f1 −3.3 %)
+    from a good one: the verdict is never 'differs', and 'inconclusive' is honest."""
     check = _verdict(holder, 73.5, 1.0)
-    assert check.verdict == "consistent", check.to_dict()
+    assert check.verdict in ("consistent", "inconclusive"), check.to_dict()
+    assert check.result.modes[0].status == "inside"
     band = check.prediction.band
     assert [m.band_hz for m in check.result.modes] == list(band.half_width_hz)
     assert all(f > 0 for f in band.geometry_parts_hz["stickout"] + band.geometry_parts_hz["stickout_identified"])
@@ -176,8 +179,9 @@ def test_a_worn_collet_differs(holder, stickout_mm, factor):
 
 
 def test_a_worn_collet_far_from_the_identified_stickout_is_never_consistent(holder):
-    """20 mm from the one identified stick-out the band is +-2.0 % (model form), and half the
-    contact lowers f1 by 3.4 %: 1.7 bands, beyond the band but not the 3 sd of 'differs'."""
+    """20 mm from the one identified stick-out the band is ±3.4 % and half the contact
+    lowers f1 by 3.3 %: inside the band, yet never 'consistent', because the wear shift
+    itself does not leave the good holder's band."""
     check = _verdict(holder, 73.5, 0.5)
     assert check.verdict in ("differs", "inconclusive"), check.to_dict()
-    assert check.result.modes[0].status != "inside" and check.result.modes[0].z < 0
+    assert check.result.modes[0].z < 0 and check.result.modes[0].deviation_pct < -2.5
