@@ -199,15 +199,19 @@ class ImportReport:
 def import_library(lib, file: str | os.PathLike, replace: bool = False) -> ImportReport:
     """Merge the holders of a library file into ``lib`` (a HolderLibrary), under its lock.
 
-    The whole file is validated first, with the assembly file's plausible ranges (a
-    holder with implausible geometry is refused, naming it); an invalid file changes nothing. See
+    The whole file is validated first; geometry that would enter the library (a new holder,
+    or a replacing one with other geometry) must also be within the assembly file's
+    plausible ranges (else refused, naming the holder). An invalid file changes nothing. See
     :func:`merge_entries` for what happens to each holder.
     """
     theirs = read_library_file(file)
-    for name, entry in theirs.items():
-        # A read keeps an implausible holder (with a warning); the library takes none.
-        refuse_implausible(entry, f"{file}: holder {name!r}", "nothing was imported")
     with lib.edit() as holders:
+        for name, entry in theirs.items():
+            # A read keeps an implausible holder (with a warning); the library takes no new
+            # one, but one it already holds unchanged (an export of itself) is no reason to refuse.
+            current = holders.get(name)
+            if current is None or (replace and current.holder != entry.holder):
+                refuse_implausible(entry, f"{file}: holder {name!r}", "nothing was imported")
         return merge_entries(holders, theirs, replace, source=str(file))
 
 

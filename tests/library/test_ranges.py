@@ -91,6 +91,17 @@ def test_importing_an_out_of_range_holder_is_refused_and_imports_nothing(old_lib
     assert lib.path.read_bytes() == before
 
 
+def test_a_library_re_importing_its_own_export_is_not_refused_for_its_old_holder(old_library, tmp_path):
+    # A backup restored into the library that made it: holder B enters nothing new.
+    lib = HolderLibrary(old_library)
+    backup = tmp_path / "backup.json"
+    assert lib.export(backup) == 2
+    before = old_library.read_bytes()
+    report = lib.import_file(backup)
+    assert report.skipped == ("A", "B") and not report.added
+    assert old_library.read_bytes() == before
+
+
 def test_a_structural_problem_still_refuses_the_file_naming_the_key(old_library):
     doc = json.loads(old_library.read_text())
     doc["holders"]["A"]["holder"]["segments"][0]["length"] = "100"
