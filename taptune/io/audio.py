@@ -220,9 +220,11 @@ def _cut_short(p: Path, name: str, frames: int, rate: int) -> tuple[str, ...]:
     declared, present, block_align, header_rate = found
     if declared <= present:
         return ()
-    announced_s = declared // block_align / header_rate
+    announced = declared // block_align
+    # Samples too: a cut of a few bytes leaves both durations the same to the millisecond.
     return (f"{name}: the file is cut short (an interrupted copy or recording?): its header announces "
-            f"{announced_s:.3f} s of audio but it holds only {frames / rate:.3f} s; the analysis uses what is there",)
+            f"{announced} samples ({announced / header_rate:.3f} s) but it holds only {frames} "
+            f"({frames / rate:.3f} s); the analysis uses what is there",)
 
 
 def wav_data_sizes(path) -> tuple[int, int, int, int] | None:

@@ -649,9 +649,8 @@ class HolderEntry:
         name = _text(d["name"], source, "name", _MAX_NAME)
         problem = holder_range_problem(holder, source)
         warnings = () if problem is None else (
-            f"{problem}; the holder is kept as it is and listed, and its parameters still predict with an "
-            f"assembly file's geometry, but its own stored geometry is not used: identify it again with a "
-            f"corrected assembly file, or remove it (taptune library remove {name!r})",)
+            f"{problem}; the holder is kept as it is and listed, but its stored geometry cannot be used: "
+            f"identify it again with a corrected assembly file, or remove it (taptune library remove {name!r})",)
         return cls(
             name=name,
             holder=holder,

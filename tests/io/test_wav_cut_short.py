@@ -21,9 +21,10 @@ def _cut(path, fraction: float) -> None:
     path.write_bytes(raw[: int(len(raw) * fraction)])
 
 
-def _message(path, announced: str, holds: str) -> str:
+def _message(path, n_announced: int, n_holds: int, rate: int = 48000) -> str:
     return (f"{path}: the file is cut short (an interrupted copy or recording?): its header announces "
-            f"{announced} s of audio but it holds only {holds} s; the analysis uses what is there")
+            f"{n_announced} samples ({n_announced / rate:.3f} s) but it holds only {n_holds} "
+            f"({n_holds / rate:.3f} s); the analysis uses what is there")
 
 
 @pytest.mark.parametrize("subtype,fmt", [("PCM_16", "WAV"), ("PCM_24", "WAV"), ("FLOAT", "WAV"), ("PCM_24", "RF64")])
@@ -36,11 +37,11 @@ def test_a_wav_cut_at_60_percent_warns_with_both_durations(tmp_path, subtype, fm
     assert read_audio(path).warnings == ()
     _cut(path, 0.6)
     cut = read_audio(path)
-    holds = f"{cut.duration_s:.3f}"
+    holds = cut.samples.shape[0]
     assert cut.duration_s == pytest.approx(1.2, abs=1e-3)
-    assert cut.warnings == (_message(path, "2.000", holds),)
+    assert cut.warnings == (_message(path, 96000, holds),)
     analysis = analyse_recording(cut)
-    assert analysis.warnings[0] == _message(path, "2.000", holds)
+    assert analysis.warnings[0] == _message(path, 96000, holds)
     assert analysis.bending_hz  # the taps that are there are still analysed
 
 
@@ -49,10 +50,11 @@ def test_the_cli_prints_the_warning_and_puts_it_in_the_json(tmp_path, capsys):
     write_audio(path, workshop_recording(0).samples, 48000, subtype="PCM_16")
     _cut(path, 0.6)
     out_json = tmp_path / "copy.json"
+    holds = read_audio(path).samples.shape[0]
     assert main(["spectrum", str(path), "--json", str(out_json)]) == 0
-    assert json.loads(out_json.read_text())["warnings"][0] == _message(path, "2.000", "1.200")
+    assert json.loads(out_json.read_text())["warnings"][0] == _message(path, 96000, holds)
     out, err = capsys.readouterr()
-    assert f"warning: {_message(path, '2.000', '1.200')}" in out + err and "Traceback" not in err
+    assert f"warning: {_message(path, 96000, holds)}" in out + err and "Traceback" not in err
 
 
 def test_a_cut_before_the_first_tap_says_so_in_the_error(tmp_path):
@@ -62,7 +64,16 @@ def test_a_cut_before_the_first_tap_says_so_in_the_error(tmp_path):
     with pytest.raises(InputError) as info:
         analyse_recording(read_audio(path))
     assert str(info.value).startswith(f"{path}: no tap found: the file is cut short (an interrupted copy or recording?): "
-                                      "its header announces 2.000 s of audio but it holds only 0.100 s")
+                                      "its header announces 96000 samples (2.000 s) but it holds only ")
+    assert "(0.100 s)" in str(info.value)
+
+
+def test_a_cut_of_one_frame_is_told_by_its_samples(tmp_path):
+    # Both durations read 2.000 s; the sample counts tell them apart.
+    path = tmp_path / "almost.wav"
+    write_audio(path, workshop_recording(0).samples, 48000, subtype="PCM_16")
+    _cut(path, 1 - 2 / path.stat().st_size)
+    assert "announces 96000 samples (2.000 s) but it holds only 95999 (2.000 s)" in read_audio(path).warnings[0]
 
 
 def test_complete_files_with_chunks_after_the_data_or_an_open_size_do_not_warn(tmp_path):
