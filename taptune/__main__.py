@@ -1,3 +1,3 @@
-from taptune.cli import main
+from taptune.cli import entry
 
-raise SystemExit(main())
+entry()

@@ -54,16 +54,19 @@ FAST_EXIT = frozenset({"identify"})
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the exit status (0 ok, 2 bad input, 1 anything else).
+    """Run the CLI; return the exit status (0 ok, 2 bad input, 1 anything else)."""
+    return _main(argv)
 
-    As the process entry (``argv`` None: the ``taptune`` script, ``python -m taptune``) a
-    command of :data:`FAST_EXIT` ends the process here once its output is flushed.
-    """
-    status = _main(argv)
-    command = next((a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")), None)
-    if argv is None and command in FAST_EXIT:
+
+def entry() -> None:
+    """The process entry (the ``taptune`` script, ``python -m taptune``): run the CLI on
+    ``sys.argv`` and exit with its status; a command of :data:`FAST_EXIT` ends the process
+    without the interpreter's teardown (:func:`_end_process`). In-process callers use
+    :func:`main`, which always returns."""
+    status = _main(None)
+    if _command(sys.argv[1:]) in FAST_EXIT:
         _end_process(status)
-    return status
+    raise SystemExit(status)
 
 
 def _end_process(status: int) -> None:
@@ -79,7 +82,10 @@ def _end_process(status: int) -> None:
     import atexit
     import threading
 
-    if threading.active_count() > 1 or sys.getprofile() is not None or sys.gettrace() is not None:
+    # Python ≥ 3.12's cProfile and coverage use sys.monitoring, not setprofile/settrace.
+    monitoring = getattr(sys, "monitoring", None)
+    watched = monitoring is not None and any(monitoring.get_tool(i) for i in range(6))
+    if threading.active_count() > 1 or sys.getprofile() is not None or sys.gettrace() is not None or watched:
         return
     try:
         sys.stdout.flush()
@@ -94,14 +100,18 @@ def _end_process(status: int) -> None:
         os._exit(status)
 
 
+def _command(argv) -> str | None:
+    """The command ``argv`` names (its first word not an option), None if none is known."""
+    command = next((a for a in argv if not a.startswith("-")), None)
+    return command if command in COMMANDS else None
+
+
 def _main(argv: list[str] | None) -> int:
     """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    command = next((a for a in argv if not a.startswith("-")), None)
-    if command not in COMMANDS:
-        command = None
+    command = _command(argv)
     try:
         parser = _build_parser(command)
     except ImportError as err:

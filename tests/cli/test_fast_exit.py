@@ -16,16 +16,20 @@ keep = Teardown()
 atexit.register(lambda: print("atexit ran", flush=True))
 {before}
 sys.argv = ["taptune"] + {argv!r}
-from taptune.cli import main
-status = main()
-print("main returned", status, flush=True)
-raise SystemExit(status)
+from taptune.cli import entry, main
+if {in_process!r}:
+    print("main returned", main(sys.argv[1:]), flush=True)
+try:
+    entry()
+except SystemExit as exc:
+    print("entry returned", exc.code, flush=True)
+    raise
 """
 
 
-def run(argv, before=""):
+def run(argv, before="", in_process=False):
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
-    return subprocess.run([sys.executable, "-c", SCRIPT.format(argv=argv, before=before)], env=env,
+    return subprocess.run([sys.executable, "-c", SCRIPT.format(argv=argv, before=before, in_process=in_process)], env=env,
                           capture_output=True, text=True, timeout=60)
 
 
@@ -33,7 +37,7 @@ def test_identify_ends_the_process_after_flushing_and_the_atexit_handlers():
     proc = run(["identify", "--help"])
     assert proc.returncode == 0
     assert "--assembly" in proc.stdout and proc.stdout.rstrip().endswith("atexit ran")
-    assert "main returned" not in proc.stdout and "teardown ran" not in proc.stdout  # no teardown
+    assert "entry returned" not in proc.stdout and "teardown ran" not in proc.stdout  # no teardown
 
 
 def test_bad_input_still_says_why_and_exits_2(tmp_path):
@@ -45,7 +49,12 @@ def test_bad_input_still_says_why_and_exits_2(tmp_path):
 
 def test_other_commands_and_profiled_runs_return_to_the_caller():
     proc = run(["model", "--help"])
-    assert proc.returncode == 0 and "main returned 0" in proc.stdout and "teardown ran" in proc.stdout
+    assert proc.returncode == 0 and "entry returned 0" in proc.stdout and "teardown ran" in proc.stdout
     # A profiler writes its results after the entry returns: identify then returns too.
     proc = run(["identify", "--help"], before="sys.setprofile(lambda *a: None)")
+    assert proc.returncode == 0 and "entry returned 0" in proc.stdout
+
+
+def test_main_called_in_process_always_returns():
+    proc = run(["identify", "--help"], in_process=True)
     assert proc.returncode == 0 and "main returned 0" in proc.stdout
