@@ -254,6 +254,8 @@ def validate_holder(h: Holder, src: str) -> Holder:
         if g > h.length + TOL_M:
             fail("[holder] gauge_length", f"({g / MM:g} mm) is longer than the holder ({h.length / MM:g} mm)")
     _check_material(h.material, "[holder] material", fail)
+    if h.length > MAX_LENGTH_M:
+        fail("[holder] segments", f"add up to {h.length / MM:g} mm: implausible, above {MAX_LENGTH_M / MM:g} mm")
     return h
 
 
@@ -270,8 +272,6 @@ def validate(asm: Assembly) -> Assembly:
         raise InputError(f"{src}: {key} {problem}")
 
     validate_holder(h, src)
-    if h.length > MAX_LENGTH_M:
-        fail("[holder] segments", f"add up to {h.length / MM:g} mm: implausible, above {MAX_LENGTH_M / MM:g} mm")
     _check_segments(t.segments, "[tool] segments", fail)
     for key, value in (
         ("[tool] total_length", t.total_length),

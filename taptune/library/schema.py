@@ -48,7 +48,6 @@ from pathlib import Path
 from taptune.errors import InputError, LibraryError
 from taptune.io.assembly import (
     GPA,
-    MAX_LENGTH_M,
     MM,
     Assembly,
     Holder,
@@ -262,12 +261,9 @@ def holder_range_problem(holder: dict, src: str) -> str | None:
     not make every other holder of the file unusable. The message names ``src``.
     """
     try:
-        h = validate_holder(holder_from_dict(holder, src), src)
+        validate_holder(holder_from_dict(holder, src), src)
     except InputError as err:
         return str(err)
-    if h.length > MAX_LENGTH_M:
-        return (f"{src}: [holder] segments add up to {h.length / MM:g} mm: implausible, "
-                f"above {MAX_LENGTH_M / MM:g} mm")
     return None
 
 
