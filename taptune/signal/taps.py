@@ -141,12 +141,15 @@ def _flat_top_runs(seg, hi: float, lo: float, tol: float, min_run: int = 2, min_
     return bool(_longest_run(at_hi) >= min_run or _longest_run(at_lo) >= min_run)
 
 
+def _run_lengths(mask) -> np.ndarray:
+    """Lengths of the runs of True values in the 1-D boolean ``mask``."""
+    d = np.diff(np.concatenate(([0], np.asarray(mask, dtype=np.int8), [0])))
+    return np.flatnonzero(d == -1) - np.flatnonzero(d == 1)
+
+
 def _longest_run(mask) -> int:
     """Length of the longest run of True values in the 1-D boolean ``mask``."""
-    if not np.any(mask):
-        return 0
-    d = np.diff(np.concatenate(([0], np.asarray(mask, dtype=np.int8), [0])))
-    return int(np.max(np.flatnonzero(d == -1) - np.flatnonzero(d == 1)))
+    return int(_run_lengths(mask).max(initial=0))
 
 
 #: "At or very near full scale": within 0.1 dB of it (a recorder's own limiter or a
@@ -179,8 +182,7 @@ def full_scale_runs(samples, min_run: int = 3, level: float = NEAR_FULL_SCALE) -
     for c in range(x.shape[1]):
         col = x[:, c]
         for mask in (col >= level, col <= -level):
-            d = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
-            total += int(np.count_nonzero(np.flatnonzero(d == -1) - np.flatnonzero(d == 1) >= min_run))
+            total += int(np.count_nonzero(_run_lengths(mask) >= min_run))
     return total
 
 
