@@ -224,19 +224,20 @@ def fit_delta_ref(cal, by_tier: bool = False) -> tuple[float, dict]:
     return best[1], best[2]
 
 
-def variants(cal, val) -> None:
-    """Other band forms: calibrated on ``cal``, measured on ``val`` (reported, not used unless chosen)."""
-    print("\nvariants (calibrated on the records, measured on the validation records):")
-    forms = [("per group, Δref 10 mm (bands.py form)", dict(delta_ref=10.0)),
-             ("per group and mode, Δref 10 mm", dict(delta_ref=10.0, per_mode=True)),
-             ("per group, pooled tiers (not --by-tier)", dict(delta_ref=bands.DELTA_REF_MM)),
-             ("per group, largest of the tiers (--by-tier)", dict(delta_ref=bands.DELTA_REF_MM, by_tier=True))]
-    for d in (5.0, 20.0, 40.0, math.inf):  # ∞: no growth with the stick-out change
+def variants(cal, val, by_tier: bool = False) -> None:
+    """Other band forms: calibrated on ``cal`` (each tier alone, the larger c kept, when
+    ``by_tier``, as the shipped form), measured on ``val`` (reported, not used unless chosen)."""
+    print(f"\nvariants ({'by tier' if by_tier else 'pooled'}, calibrated on the records, measured on the validation records):")
+    forms = [(f"per group, Δref {bands.DELTA_REF_MM:g} mm (bands.py form)", dict(delta_ref=bands.DELTA_REF_MM)),
+             (f"per group and mode, Δref {bands.DELTA_REF_MM:g} mm", dict(delta_ref=bands.DELTA_REF_MM, per_mode=True)),
+             (f"per group, Δref {bands.DELTA_REF_MM:g} mm, {'pooled tiers' if by_tier else 'largest of the tiers'}",
+              dict(delta_ref=bands.DELTA_REF_MM, by_tier=not by_tier))]
+    for d in sorted({5.0, 10.0, 20.0, 40.0, math.inf} - {bands.DELTA_REF_MM}):  # ∞: no growth with Δ
         forms.append((f"per group, Δref {d:g} mm", dict(delta_ref=d)))
     for s in (0.5, 0.0):
-        forms.append((f"per group, set part × {s:g}", dict(delta_ref=10.0, set_scale=s)))
+        forms.append((f"per group, set part × {s:g}", dict(delta_ref=bands.DELTA_REF_MM, set_scale=s)))
     for name, kw in forms:
-        c = calibrate(cal, **kw)
+        c = calibrate(cal, **{"by_tier": by_tier, **kw})
         kw.pop("by_tier", None)
         print(f"  {name}: c = {', '.join(f'{k} {100 * v:.3f} %' for k, v in c.items())}")
         print("    " + line("calibration (in-sample)", stats(cal, c, **kw)))
@@ -264,15 +265,13 @@ def rewrite_results(paths) -> None:
     ``--write``, in a new process), as :func:`benchmarks.realism.run.run_case` predicts:
     their ``covered`` and half-widths, and their summaries, then say what the shipped bands do."""
     from benchmarks.realism.corpus import case_of
-    from benchmarks.realism.run import reevaluate, summarise, write_results
+    from benchmarks.realism.run import product_predict, reevaluate, summarise, write_results
 
     for p in paths:
         data = json.loads(Path(p).read_text())
 
         def band(sets, asm, rec):
-            return predict(sets, asm, relative_floor=rec["identification"]["relative_floor"],
-                           identified=[case_of(rec).described],
-                           measured_modes=bands.measured_modes([rec["identification"]["bending_measured_hz"]]))
+            return product_predict(sets, asm, case_of(rec), rec["identification"])
 
         data["cases"] = reevaluate(data["cases"], band)
         data["summary"] = summarise(data["cases"])
@@ -317,7 +316,7 @@ def main(argv=None) -> int:
     for title, rs in by_set(cal + val).items():
         print("  " + line(title, stats(rs, bands.MODEL_FORM)))
     if args.variants:
-        variants(cal, val)
+        variants(cal, val, args.by_tier)
     if args.write:
         tiers = " + ".join(sorted({r["tier"] for r in cal}))
         n_cases = len({r["case"] for r in cal})

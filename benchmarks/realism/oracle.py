@@ -62,9 +62,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from benchmarks.realism.corpus import TIERS, make_case  # noqa: E402
+from benchmarks.realism.run import MODES  # noqa: E402
 
-MODES = (1, 2, 3)
-MM = 1e-3
 #: Least-squares starts per fit: the nominal holder, the pipeline's best set (when known)
 #: and Latin-hypercube points of the unit cube.
 STARTS = 12
@@ -355,10 +354,17 @@ def _compact(record: dict) -> dict:
     return record
 
 
+def _write(path, data: dict) -> None:
+    """Replace a results file atomically (a stored 20-minute run is never left half-written)."""
+    from taptune.io.atomic import atomic_write_bytes
+
+    atomic_write_bytes(path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", default="validation", choices=("calibration", "validation", "infamily"))
-    ap.add_argument("--tier", default="issue", choices=TIERS)
+    ap.add_argument("--tier", default="harsh", choices=TIERS)
     ap.add_argument("--n", type=int, default=48)
     ap.add_argument("--start", type=int, default=0)
     ap.add_argument("--starts", type=int, default=STARTS, help="least-squares starts per fit")
@@ -375,8 +381,7 @@ def main(argv=None) -> int:
         data["summary"] = summarise(data["cases"])
         print_summary(data["summary"], f"{data['meta']['tier']} tier, {data['meta']['split']}")
         if args.rewrite:
-            with open(args.summary, "w", encoding="utf-8") as fh:
-                json.dump(data, fh, separators=(",", ":"))
+            _write(args.summary, data)
         return 0
     t0 = time.time()
     pipe = pipeline_records(args.tier, args.split)
@@ -401,8 +406,7 @@ def main(argv=None) -> int:
         data["meta"]["updated_indices"] = sorted(set(data["meta"].get("updated_indices", [])) | set(new))
         data["summary"] = summarise(data["cases"])
         print_summary(data["summary"], f"{args.tier} tier, {args.split} (updated {args.update})")
-        with open(args.update, "w", encoding="utf-8") as fh:
-            json.dump(data, fh, separators=(",", ":"))
+        _write(args.update, data)
         return 0
     summary = summarise(records)
     print_summary(summary, f"{args.tier} tier, {args.split}")
@@ -411,8 +415,7 @@ def main(argv=None) -> int:
         meta = {"split": args.split, "tier": args.tier, "n": args.n, "start": args.start, "starts": args.starts,
                 "valley_tol": VALLEY_TOL, "pipeline_cases": sum(r is not None for r in recs),
                 "wall_s": round(time.time() - t0, 1)}
-        with open(args.out, "w", encoding="utf-8") as fh:
-            json.dump({"meta": meta, "summary": summary, "cases": records}, fh, separators=(",", ":"))
+        _write(args.out, {"meta": meta, "summary": summary, "cases": records})
     return 0
 
 

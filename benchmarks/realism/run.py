@@ -75,8 +75,7 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, t
     """
     from benchmarks.realism.audio import audibility_margins, record
     from taptune.errors import TaptuneError
-    from taptune.identify import IdentifyOptions, predict
-    from taptune.identify.bands import measured_modes
+    from taptune.identify import IdentifyOptions
     from taptune.identify.pipeline import identify_recordings
 
     case = make_case(split, index, tier=tier)
@@ -114,14 +113,21 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, t
     }
     out["cpu_s"] = round(cpu, 3)
     t1 = time.process_time()
-    # As the library predicts (taptune.library.schema.Entry.predict): the fit's misfit floor,
-    # the identified assembly (Δ stick-out) and the modes the tap measured.
-    measured = measured_modes(result.bending_measured_hz)
-    out["predictions"] = predictions(case, lambda asm: predict(
-        result.param_sets, asm, relative_floor=result.relative_floor, identified=[case.described],
-        measured_modes=measured), result.bending_measured_hz[0])
+    out["predictions"] = predictions(case, lambda asm: product_predict(result.param_sets, asm, case, out["identification"]),
+                                     result.bending_measured_hz[0])
     out["predict_cpu_s"] = round(time.process_time() - t1, 3)
     return out
+
+
+def product_predict(param_sets, assembly, case, identification: dict):
+    """Predict ``assembly`` as the library does (taptune.library.schema.Entry.predict): with
+    the fit's misfit floor, the identified assembly (Δ stick-out) and the modes the tap
+    measured, from a record's ``identification``."""
+    from taptune.identify import predict
+    from taptune.identify.bands import measured_modes
+
+    return predict(param_sets, assembly, relative_floor=identification["relative_floor"], identified=[case.described],
+                   measured_modes=measured_modes([identification["bending_measured_hz"]]))
 
 
 def predictions(case, predict_at, measured_hz) -> list[dict]:
