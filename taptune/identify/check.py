@@ -31,6 +31,12 @@ measurement uncertainty of this tap's peak σ = max(tap-to-tap scatter, 0.05 % o
   recording carries), a mode beyond its band but not outside, or a tap inside both the
   good holder's band and the worn holder's.
 
+A mode measured inside the spindle interface's local-mode band (``excluded_bands_hz`` of
+the analysis: known only as a band, not marked by a tap on the interface) may be an
+interface mode or the bending mode beside it — the sound cannot tell them apart — so it
+decides nothing on its own: outside its band it makes the check ``inconclusive``, not
+``differs``, and it cannot be the mode that rules out wear.
+
 The verdict therefore depends on the band: a band twice as wide needs twice the shift to
 read ``differs``, and a band too wide to tell the good holder from a worn one turns
 ``consistent`` into ``inconclusive`` rather than pretending the holder is fine.
@@ -129,8 +135,9 @@ def check_tap(analysis, prediction, worn_hz=None, measurement_floor: float = MEA
     """
     peaks = {p.mode: p for p in analysis.bending_peaks if p.mode is not None}
     bandwidth = getattr(analysis, "bandwidth_hz", None)
+    interface = tuple(getattr(analysis, "excluded_bands_hz", None) or ())
     worn = None if worn_hz is None else np.asarray(worn_hz, dtype=float)
-    modes, reasons, sensitive = [], [], []
+    modes, reasons, sensitive, ambiguous = [], [], [], set()
     for n, (fp, spread) in enumerate(zip(prediction.bending_hz, prediction.bending_hz_spread), 1):
         band = float(spread)
         peak = peaks.get(n)
@@ -148,6 +155,9 @@ def check_tap(analysis, prediction, worn_hz=None, measurement_floor: float = MEA
         z = d / s
         status = "inside" if abs(z) <= Z_BAND else ("outside" if abs(z) > z_outside else "beyond")
         modes.append(ModeCheck(n, fm, fp, band, sigma, 100 * (fm / fp - 1), z, status))
+        if any(lo <= fm <= hi for lo, hi in interface):
+            ambiguous.add(n)
+            continue
         if worn is not None and n <= worn.size:
             # The worn holder's prediction carries the same band: the tap rules it out
             # when it lies outside that band too, and wear moves the mode out of the good
@@ -156,14 +166,21 @@ def check_tap(analysis, prediction, worn_hz=None, measurement_floor: float = MEA
             # band (realism check pair iche001: a 3 % wear shift in a ±4 % band read
             # consistent).
             sensitive.append(abs(fm - worn[n - 1]) > Z_BAND * s and abs(fp - worn[n - 1]) > Z_BAND * s)
-    verdict = _verdict(modes, sensitive, worn is not None, reasons)
+    verdict = _verdict(modes, sensitive, worn is not None, reasons, ambiguous)
     return CheckResult(verdict, tuple(modes), tuple(reasons))
 
 
-def _verdict(modes: list[ModeCheck], sensitive: list[bool], knows_wear: bool, reasons: list[str]) -> str:
+def _verdict(modes: list[ModeCheck], sensitive: list[bool], knows_wear: bool, reasons: list[str],
+             ambiguous=frozenset()) -> str:
     used = [m for m in modes if m.z is not None]
     if not used:
         reasons.append("no bending mode of the prediction was measured: tap again (closer microphone, harder tap)")
+        return "inconclusive"
+    unsure = [m for m in used if m.mode in ambiguous and m.status != "inside"]
+    if unsure and all(m.mode in ambiguous for m in used if m.status == "outside"):
+        reasons += [f"mode {m.mode} ({m.measured_hz:.0f} Hz) is {abs(m.z):.1f} σ {'below' if m.z < 0 else 'above'} "
+                    f"its prediction, but it lies among the spindle interface's own modes, which the sound cannot "
+                    f"tell from a bending mode: tap the interface too, or check at another stick-out" for m in unsure]
         return "inconclusive"
     outside = [m for m in used if m.status == "outside"]
     beyond = [m for m in used if m.status == "beyond"]

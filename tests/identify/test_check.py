@@ -15,11 +15,12 @@ BAND = (6.0, 30.0, 60.0)  # 0.2, 0.3, 0.375 %
 WORN = (2900.0, 9800.0, 15900.0)  # what halved contact stiffnesses would give
 
 
-def _analysis(measured, scatter=0.0, bandwidth_hz=24000.0):
-    """An analysis with bending peaks at ``measured`` (None = mode not found)."""
+def _analysis(measured, scatter=0.0, bandwidth_hz=24000.0, interface=()):
+    """An analysis with bending peaks at ``measured`` (None = mode not found) and the
+    interface's local-mode bands ``interface`` [(lo, hi) Hz]."""
     peaks = [SimpleNamespace(hz=f, mode=n, kind="bending", scatter_hz=scatter)
              for n, f in enumerate(measured, 1) if f is not None]
-    return SimpleNamespace(bending_peaks=peaks, bandwidth_hz=bandwidth_hz)
+    return SimpleNamespace(bending_peaks=peaks, bandwidth_hz=bandwidth_hz, excluded_bands_hz=list(interface))
 
 
 def _prediction(bands=BAND):
@@ -44,6 +45,18 @@ def test_one_mode_far_outside_differs():
     r = _check((2985.0, 10000.0, 16000.0))
     assert r.verdict == "differs" and r.modes[0].status == "outside"
     assert r.modes[0].z == pytest.approx(-15.0 / np.hypot(6.0 / 1.645, 5e-4 * 2985.0))
+
+
+def test_a_mode_among_the_interface_modes_decides_nothing_on_its_own():
+    # Mode 2 far low, but inside the HSK-A63 band: it may be an interface mode.
+    hsk = [(9350.0, 10550.0)]
+    r = _check((3004.0, 9900.0, None), interface=hsk)
+    assert r.verdict == "inconclusive" and "interface" in r.reasons[-1] and r.modes[1].status == "outside"
+    assert _check((3004.0, 9900.0, None)).verdict == "differs"  # the interface tapped: no band left
+    # A mode outside the band still decides; an in-band mode cannot be the one that rules out wear.
+    assert _check((2985.0, 9900.0, None), interface=hsk).verdict == "differs"
+    assert _check((None, 9990.0, None), interface=hsk).verdict == "inconclusive"
+    assert _check((None, 9990.0, None)).verdict == "consistent"
 
 
 def test_modes_above_the_prediction_differ_and_point_at_the_description():
