@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 
 from taptune.identify import IdentifyOptions, predict  # noqa: E402
 from taptune.identify import identify  # noqa: E402
-from taptune.identify.bands import relative_sensitivities  # noqa: E402
+from taptune.identify.bands import clear_caches as clear_sensitivities  # noqa: E402
 from taptune.identify.pipeline import analyse_for_assembly, identify_recordings, transfer_outlook  # noqa: E402
 from taptune.model.reduced import cached_evaluator  # noqa: E402
 from taptune.io.assembly import load_assembly  # noqa: E402
@@ -150,7 +150,7 @@ def main() -> None:
                 t1, c1 = time.perf_counter(), cpu_seconds()
                 result = identify([analysis], [asm], options)
                 t2, c2 = time.perf_counter(), cpu_seconds()
-                relative_sensitivities.cache_clear()  # as in a fresh CLI run
+                clear_sensitivities()  # as in a fresh CLI run
                 transfer_outlook(result, [asm])
                 split.append((t1 - t0, c1 - c0, t2 - t1, c2 - c1, time.perf_counter() - t2, cpu_seconds() - c2))
             else:

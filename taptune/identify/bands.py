@@ -187,17 +187,17 @@ def _with_flute_ratio(asm, delta):
     return replace(asm, tool=replace(t, segments=(t.segments[0], flute), flute_ratio=ratio))
 
 
-@functools.lru_cache(maxsize=32)
 def relative_sensitivities(assembly, params, tolerances: Tolerances, model_options, n_modes: int = 3,
-                           base_hz: tuple[float, ...] | None = None) -> dict:
+                           base_hz=None) -> dict:
     """Relative change of f1..fn [–] per stated tolerance, by central differences.
 
-    Cached: an identified assembly's sensitivities serve every prediction from it
-    (all arguments are frozen, hashable values).
+    The ± moves and the base are cached apart (all arguments are frozen, hashable
+    values): an assembly's moves serve every prediction from it, whether or not the
+    caller knows its base.
 
     Parameters
     ----------
-    base_hz : tuple of float, optional
+    base_hz : sequence of float, optional
         f1..fn [Hz] of ``assembly`` with ``params`` on the full model with
         ``model_options``, when the caller has solved them already (a prediction has): the
         differences are divided by them instead of building and solving that model again.
@@ -208,16 +208,29 @@ def relative_sensitivities(assembly, params, tolerances: Tolerances, model_optio
         ``{"stickout" | "diameter" | "flute_ratio": ndarray (n_modes,)}``: Δf/f for a
         change by one tolerance (absent when the tolerance is 0 or does not apply).
     """
-    from taptune.errors import InputError
+    diffs = _half_differences(assembly, params, tolerances, model_options, n_modes)
+    if not diffs:
+        return {}
+    base = np.asarray(base_hz, dtype=float) if base_hz is not None else _base_hz(assembly, params, model_options,
+                                                                                 n_modes)
+    return {name: d / base for name, d in diffs.items()}
+
+
+def _solved_hz(assembly, params, model_options, n_modes: int) -> np.ndarray:
+    """f1..fn [Hz] of ``assembly`` with ``params`` on the full model."""
     from taptune.model import build_model, solve_modes
 
-    def freqs(asm):
-        return np.asarray(solve_modes(build_model(asm, model_options), params, n_modes=n_modes).frequency_hz[:n_modes])
+    return np.asarray(solve_modes(build_model(assembly, model_options), params, n_modes=n_modes).frequency_hz[:n_modes])
+
+
+@functools.lru_cache(maxsize=32)
+def _half_differences(assembly, params, tolerances: Tolerances, model_options, n_modes: int) -> dict:
+    """Half the change of f1..fn [Hz] per stated tolerance, (f(+tol) − f(−tol)) / 2."""
+    from taptune.errors import InputError
 
     out = {}
     moves = (("stickout", _with_stickout, tolerances.stickout), ("diameter", _with_diameters, tolerances.diameter),
              ("flute_ratio", _with_flute_ratio, tolerances.flute_ratio))
-    base = None
     for name, move, tol in moves:
         if tol <= 0:
             continue
@@ -227,29 +240,40 @@ def relative_sensitivities(assembly, params, tolerances: Tolerances, model_optio
             continue  # e.g. the stick-out cannot grow by the tolerance: leave that part out
         if up is None or down is None:
             continue
-        if base is None:
-            base = freqs(assembly) if base_hz is None else np.asarray(base_hz, dtype=float)
-        out[name] = (freqs(up) - freqs(down)) / 2 / base
+        f_up, f_down = _solved_hz(up, params, model_options, n_modes), _solved_hz(down, params, model_options, n_modes)
+        out[name] = (f_up - f_down) / 2
+        out[name].flags.writeable = False  # cached: shared by every caller
     return out
 
 
-def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options, bending_hz,
-                  identified_hz=None) -> tuple[np.ndarray, dict]:
+@functools.lru_cache(maxsize=32)
+def _base_hz(assembly, params, model_options, n_modes: int) -> np.ndarray:
+    """f1..fn [Hz] of ``assembly`` with ``params``, cached (the base of its sensitivities)."""
+    f = _solved_hz(assembly, params, model_options, n_modes)
+    f.flags.writeable = False  # cached: shared by every caller
+    return f
+
+
+def clear_caches() -> None:
+    """Forget the cached sensitivities' model solves (as a fresh process starts)."""
+    _half_differences.cache_clear()
+    _base_hz.cache_clear()
+
+
+def geometry_term(assembly, params, identified, tolerances: Tolerances, model_options,
+                  bending_hz) -> tuple[np.ndarray, dict]:
     """The geometry component [Hz] per mode and its parts (see the module docstring).
 
     ``bending_hz`` are the full model's f1..fn [Hz] of ``assembly`` with ``params`` (the
     prediction's best set): they also serve as the base of its sensitivities.
-    ``identified_hz``, when given, are those of each identified assembly (what the
-    identification's full-model check solved): the base of theirs.
     """
     f = np.asarray(bending_hz, dtype=float)
-    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size, tuple(map(float, f)))
+    pred = relative_sensitivities(assembly, params, tolerances, model_options, f.size, f)
     parts = {}
     if "stickout" in pred:
         parts["stickout"] = np.abs(pred["stickout"]) * f
     if identified:
-        bases = _identified_bases(identified, identified_hz, f.size)
-        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size, b) for a, b in zip(identified, bases)]
+        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size) for a in identified]
         so = [s["stickout"] for s in ids if "stickout" in s]
         if so:
             # Independent ruler errors, one per recording: their mean error enters.
@@ -260,15 +284,6 @@ def geometry_term(assembly, params, identified, tolerances: Tolerances, model_op
                 parts[name] = np.min(np.abs(diffs), axis=0) * f
     total = np.sqrt(sum(v ** 2 for v in parts.values())) if parts else np.zeros_like(f)
     return total, parts
-
-
-def _identified_bases(identified, identified_hz, n_modes: int) -> list:
-    """Per identified assembly, its f1..fn [Hz] as a hashable tuple, or None when not
-    known for exactly these modes (the sensitivities then solve them)."""
-    if identified_hz is None or len(identified_hz) != len(identified):
-        return [None] * len(identified)
-    return [tuple(map(float, hz)) if len(hz) == n_modes and all(x is not None for x in hz) else None
-            for hz in identified_hz]
 
 
 def delta_stickout_mm(assembly, identified) -> float | None:

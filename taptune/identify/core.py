@@ -286,7 +286,7 @@ def identify(
 
 def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3,
             relative_floor: float = 5e-4, *, identified: Sequence | None = None, tolerances=None,
-            model_form=None, measured_modes=None, identified_hz=None) -> Prediction:
+            model_form=None, measured_modes=None) -> Prediction:
     """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
 
     The first set is the best fit and gives the values. The ± half-width
@@ -308,10 +308,6 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         :data:`bands.MODEL_FORM`; zeros give the parameter and geometry band alone).
     measured_modes : sequence of bool, optional
         Which modes the tap(s) measured (sets the evidence groups, :func:`bands.evidence_groups`).
-    identified_hz : sequence of sequence of float, optional
-        Per identified assembly, the full model's f1..fn [Hz] with the best set and these
-        model options, when the caller has them (an identification's ``bending_model_hz``):
-        the geometry term's sensitivities then do not build and solve those models again.
     """
     from taptune.model import ModelOptions, build_model, solve_modes
 
@@ -328,7 +324,7 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
     tol = tolerances if tolerances is not None else getattr(assembly, "tolerances", Tolerances())
     identified = list(identified or ())
     set_hz = np.maximum(np.abs(f - f[0]).max(0), relative_floor * f[0])
-    geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0], identified_hz)
+    geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0])
     delta = bands.delta_stickout_mm(assembly, identified)
     groups = bands.evidence_groups(f, measured_modes)
     model_hz = bands.model_form_term(f[0], delta, bands.MODEL_FORM if model_form is None else model_form, groups)

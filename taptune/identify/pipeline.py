@@ -187,10 +187,6 @@ def transfer_outlook(result, assemblies, offset_mm: float = 20.0):
         except InputError:
             continue
         measured = getattr(result, "bending_measured_hz", None)
-        # The identification's full-model check solved each assembly with the best set (on
-        # the default model options, which the CLI, batch and app identify with and this
-        # prediction uses): its frequencies spare the band's sensitivities those solves.
         return predict(result.param_sets, target, relative_floor=result.relative_floor, identified=list(assemblies),
-                       measured_modes=None if measured is None else measured_modes(measured),
-                       identified_hz=getattr(result, "bending_model_hz", None))
+                       measured_modes=None if measured is None else measured_modes(measured))
     return None

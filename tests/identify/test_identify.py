@@ -64,6 +64,22 @@ def test_same_seed_gives_identical_results_whatever_the_number_of_processes(refe
     assert a == b
 
 
+def test_transfer_outlook_is_the_prediction_it_states(reference_fit):
+    """The outlook's numbers are predict's at 20 mm more stick-out, whatever the caches hold."""
+    from taptune.identify.bands import clear_caches, measured_modes
+    from taptune.identify.pipeline import transfer_outlook
+
+    asm, _, result = reference_fit
+    clear_caches()
+    outlook = transfer_outlook(result, [asm]).to_dict()
+    clear_caches()
+    target = asm.with_stickout(asm.stickout + 20e-3)
+    cold = predict(result.param_sets, target, relative_floor=result.relative_floor, identified=[asm],
+                   measured_modes=measured_modes(result.bending_measured_hz)).to_dict()
+    assert outlook == cold
+    assert transfer_outlook(result, [asm]).to_dict() == cold  # from the caches this time
+
+
 def test_progress_is_reported_and_can_cancel(reference_fit):
     asm, analysis, _ = reference_fit
     seen = []
