@@ -12,19 +12,24 @@ rows with other bands (``check_tap`` is a pure function): how the verdicts depen
 Needs ``benchmarks.realism`` (the corpus). One reference (identification + 5 checks)
 ≈ 55 CPU-s.
 
-Result (2026-11-25, 12 references each, consistent/differs/inconclusive; check split)::
+Result (2026-11-25, second run: skirt-peak rule, bands calibrated by tier, interface-band
+rule; 12 references each, consistent/differs/inconclusive; check split)::
 
                         issue tier                 harsh tier
     re-clamped          8/0/4                      6/0/6
-    elsewhere           4/0/8                      2/0/10
+    elsewhere           4/0/8                      1/0/11
     worn 0.5            0/9/3                      0/9/3
     worn 0.3            0/11/1                     0/12/0
-    worn 0.5 elsewhere  0/5/7                      0/4/8
+    worn 0.5 elsewhere  0/3/9                      0/3/9
 
-No good holder reads ``differs``, no worn one ``consistent`` (before the rule that the
-wear shift must itself leave the good band, iche001 "worn 0.5 elsewhere" read
-``consistent``: a 3 % shift inside a ±4 % band, the prediction 6 % off). Inconclusive
-verdicts come from wide bands (one tap, mode 1 only, stick-out read to ±0.3 mm).
+No good holder reads ``differs``, no worn one ``consistent``. Before the interface-band
+rule of :mod:`taptune.identify.check`, che008 re-clamped read ``differs``: its mode 1
+(9.76 kHz) sits between interface modes at 9.49 and 9.96 kHz and the identification took
+the upper one. Before the rule that the wear shift must itself leave the good band,
+iche001 "worn 0.5 elsewhere" read ``consistent`` (a 3 % shift inside a ±4 % band, the
+prediction 6 % off). Inconclusive verdicts come from wide bands (one tap, mode 1 only,
+stick-out read to ±0.3 mm); the first run (pooled bands) had 2/0/10 and 0/4/8 (harsh),
+0/5/7 (issue) where these have 1/0/11, 0/3/9 and 0/3/9.
 
     python -m benchmarks.bench_check --n 12 [--split check|infamily] [--tier harsh|issue] [--jobs 2] [--out check.json]
 
