@@ -260,6 +260,32 @@ def write_constants(c: dict, delta_ref: float, note: str) -> None:
     print(f"wrote MODEL_FORM = {{{body}}}, DELTA_REF_MM = {ref} into {path}")
 
 
+def joint(cal_paths, val_paths, write: bool) -> None:
+    """Calibrate MODEL_FORM_JOINT on joint (two-tap) identifications: the ``rows`` of
+    ``benchmarks/realism/two_taps.py`` results (set and geometry parts of each prediction
+    of the stick-out no tap saw), each tier alone, the larger c kept, and never below the
+    one-tap c of the group (a holder's library history can mix one-tap and joint
+    identifications); measured on the validation rows."""
+    cal = [r for p in cal_paths for rec in load([p]) for r in rec.get("rows", [])]
+    val = [r for p in val_paths for rec in load([p]) for r in rec.get("rows", [])]
+    raw = calibrate(cal, delta_ref=bands.DELTA_REF_MM, by_tier=True)
+    c = {g: max(raw.get(g, 0.0), bands.MODEL_FORM[g]) for g in bands.GROUPS}
+    print(f"joint identifications, {len(cal)} predictions: calibrated c "
+          + ", ".join(f"{g} {100 * raw.get(g, 0.0):.3f} % (n {sum(r['group'] == g for r in cal)})" for g in bands.GROUPS)
+          + "; kept (at least one tap's): " + ", ".join(f"{g} {100 * v:.3f} %" for g, v in c.items()))
+    for title, rs in by_set(val).items():
+        print("  " + line(f"{title} (validation), one-tap c", stats(rs, bands.MODEL_FORM)))
+        print("  " + line(f"{title} (validation), joint c", stats(rs, c)))
+    if write:
+        path = REPO / "taptune" / "identify" / "bands.py"
+        body = ", ".join(f'"{g}": {round(v, 5)}' for g, v in c.items())
+        text, n = re.subn(r"^MODEL_FORM_JOINT = .*$", f"MODEL_FORM_JOINT = {{{body}}}", path.read_text(), flags=re.M)
+        if n != 1:
+            raise SystemExit("bands.py: could not find the MODEL_FORM_JOINT line")
+        path.write_text(text)
+        print(f"wrote MODEL_FORM_JOINT = {{{body}}} into {path}")
+
+
 def rewrite_results(paths) -> None:
     """Redo the stored predictions of results JSONs with the bands now in bands.py (run after
     ``--write``, in a new process), as :func:`benchmarks.realism.run.run_case` predicts:
@@ -291,6 +317,8 @@ def main(argv=None) -> int:
                                                             "per group (every tier covered, not only the pool)")
     ap.add_argument("--cache", help="a JSON file keeping the per-prediction rows of each results file "
                                      "(by path, size and time): a second run skips the re-prediction")
+    ap.add_argument("--joint", action="store_true", help="calibrate MODEL_FORM_JOINT on two-tap results "
+                                                          "(benchmarks/realism/two_taps.py) instead")
     ap.add_argument("--rewrite-results", nargs="+", metavar="JSON",
                     help="only redo the predictions of these results JSONs with the bands now in bands.py")
     args = ap.parse_args(argv)
@@ -299,6 +327,9 @@ def main(argv=None) -> int:
         return 0
     if not args.records:
         ap.error("--records is required (or --rewrite-results)")
+    if args.joint:
+        joint(args.records, args.validate, args.write)
+        return 0
     cal = cached_rows(args.records, args.cache)
     val = cached_rows(args.validate, args.cache) if args.validate else []
     print("set + geometry only:")

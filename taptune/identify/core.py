@@ -305,7 +305,8 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         Default: ``assembly.tolerances`` (the assembly file's keys, or their defaults).
     model_form : dict or sequence of float, optional
         Model-form coefficients per evidence group, or per mode (default
-        :data:`bands.MODEL_FORM`; zeros give the parameter and geometry band alone).
+        :func:`bands.model_form_for` the number of ``identified`` assemblies: one tap or
+        several; zeros give the parameter and geometry band alone).
     measured_modes : sequence of bool, optional
         Which modes the tap(s) measured (sets the evidence groups, :func:`bands.evidence_groups`).
     """
@@ -327,7 +328,8 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
     geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0])
     delta = bands.delta_stickout_mm(assembly, identified)
     groups = bands.evidence_groups(f, measured_modes)
-    model_hz = bands.model_form_term(f[0], delta, bands.MODEL_FORM if model_form is None else model_form, groups)
+    coefficients = bands.model_form_for(len(identified)) if model_form is None else model_form
+    model_hz = bands.model_form_term(f[0], delta, coefficients, groups)
     half = bands.compose(set_hz, geometry_hz, model_hz)
     band = Band(
         half_width_hz=tuple(map(float, half)), set_hz=tuple(map(float, set_hz)),

@@ -159,3 +159,21 @@ def test_prediction_band_uses_the_group_of_each_mode(reference_assembly):
     expected = [c[g] * f * (1 + 10.0 / DELTA_REF_MM) for g, f in zip(groups, p.bending_hz)]
     assert np.allclose(p.band.model_form_hz, expected)
     assert "not measured in the tap" in p.band_text()
+
+
+def test_a_jointly_identified_holder_takes_the_joint_coefficients_never_narrower(reference_assembly):
+    from taptune.identify.bands import MODEL_FORM_JOINT, model_form_for
+
+    assert model_form_for(1) is MODEL_FORM and model_form_for(2) is MODEL_FORM_JOINT
+    assert all(MODEL_FORM_JOINT[g] >= MODEL_FORM[g] for g in GROUPS)  # a library history may mix both
+    target = reference_assembly.with_stickout(0.0735)
+    taps = [reference_assembly, reference_assembly.with_stickout(0.0635)]
+    measured = (True, False, False)
+    joint = predict(SETS, target, identified=taps, measured_modes=measured, tolerances=EXACT)
+    by_hand = predict(SETS, target, identified=taps, measured_modes=measured, tolerances=EXACT, model_form=MODEL_FORM_JOINT)
+    assert joint.bending_hz_spread == by_hand.bending_hz_spread
+    one = predict(SETS, target, identified=taps[:1], measured_modes=measured, tolerances=EXACT)
+    c = coefficients_for(MODEL_FORM_JOINT, joint.band.model_form_groups, 3)
+    # Δ = 10 mm from the nearer tap: c × f × (1 + 10/Δref).
+    assert np.allclose(joint.band.model_form_hz, c * np.array(joint.bending_hz) * (1 + 10.0 / DELTA_REF_MM))
+    assert one.band.delta_stickout_mm == pytest.approx(20.0)
