@@ -39,6 +39,13 @@ of 24 each, under the 200 kB limit); validation: 48 per tier::
         --validate $R/results_issue_validation*.json $R/results_harsh_validation*.json $R/results_infamily.json \
         --cache /tmp/taptune-band-rows.json --by-tier --write [--variants]
     python benchmarks/calibrate_bands.py --rewrite-results $R/results_*.json
+    # joint (two-tap) identifications: MODEL_FORM_JOINT
+    for tier in issue harsh; do for split in calibration:72 validation:48; do
+      python -m benchmarks.realism.two_taps --tier $tier --split ${split%:*} --n ${split#*:} --jobs 2 \
+          --single "$R/results_${tier}_${split%:*}*.json" --out $R/two_taps_${tier}_${split%:*}.json
+    done; done
+    python benchmarks/calibrate_bands.py --joint --records $R/two_taps_*_calibration.json \
+        --validate $R/two_taps_*_validation.json --write
     python -m pytest tests/identify/test_bands.py tests/realism
 
 ``--by-tier`` calibrates each tier alone and keeps the larger c (the shipped choice: each

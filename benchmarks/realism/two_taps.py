@@ -9,6 +9,12 @@ saw, as the library predicts it (both identified assemblies, the modes either ta
 measured). The single-tap predictions of the same query come from the stored results of
 ``benchmarks.realism.run`` for comparison (same holders, same query).
 
+Each record also keeps ``rows``: the band's set and geometry parts of every prediction
+without the model-form term, on which ``benchmarks/calibrate_bands.py --joint`` calibrates
+``bands.MODEL_FORM_JOINT`` and measures it. The stored ``two_taps_*.json`` were made
+before that constant existed: their ``predictions`` carry the one-tap coefficients (the
+"before" of that calibration; ``--joint`` prints the "after").
+
 Run (≈ 3 min wall for 48 holders on 2 cores)::
 
     python -m benchmarks.realism.two_taps --tier issue --split validation --n 48 --jobs 2 \
