@@ -309,6 +309,20 @@ def _draw_tool(rng, index: int, name_prefix: str):
     return family, d, total, flute, name, holder_name, described_holder, max_insert, min_insertion_mm(family, d)
 
 
+def _draw_doublet_and_recording(rng, p_doublet: float, kinds: list) -> tuple[float, str, float, bool]:
+    """A slight asymmetry (a doublet) with probability ``p_doublet`` and a low-grade (phone)
+    recording with probability 0.4, the last deviation draws of both tiers; appends their
+    kinds. Returns (asymmetry, its kind, its angle [deg], low grade)."""
+    asym, asym_kind, angle = 0.0, "contact", 0.0
+    if rng.uniform() < p_doublet:
+        asym, asym_kind, angle = float(rng.uniform(0.003, 0.015)), str(rng.choice(["contact", "section"])), float(rng.uniform(0, 90))
+        kinds.append("doublet")
+    low_grade = bool(rng.uniform() < 0.4)
+    if low_grade:
+        kinds.append("lowgrade")
+    return asym, asym_kind, angle, low_grade
+
+
 def _try_case(rng, split, index, seed, in_family) -> Case | None:
     family, d, total, flute, name, holder_name, described_holder, max_insert, min_insert = \
         _draw_tool(rng, index, split[:3])
@@ -341,12 +355,7 @@ def _try_case(rng, split, index, seed, in_family) -> Case | None:
         if rng.uniform() < (0.7 if family.collet else 0.3):
             mass = draw_mass(rng, family.collet, described_holder.length / MM)
             kinds.append("mass")
-        if rng.uniform() < 0.5:
-            asym, asym_kind, angle = float(rng.uniform(0.003, 0.015)), str(rng.choice(["contact", "section"])), float(rng.uniform(0, 90))
-            kinds.append("doublet")
-        low_grade = bool(rng.uniform() < 0.4)
-        if low_grade:
-            kinds.append("lowgrade")
+        asym, asym_kind, angle, low_grade = _draw_doublet_and_recording(rng, 0.5, kinds)
     holder = TruthHolder(draw_params(rng), profile, mass, asym, asym_kind, angle)
     return _build_case(rng, name, split, seed, family, d, (total, flute), described_holder, holder_name, holder,
                        stickout, offsets, ruler, od_f, ratio, low_grade, kinds)
@@ -408,12 +417,7 @@ def _try_issue_case(rng, split, index, seed, in_family) -> Case | None:
         if family.collet and rng.uniform() < 0.5:
             mass = draw_mass(rng, True, described_holder.length / MM)
             kinds.append("mass")
-        if rng.uniform() < 1 / 3:
-            asym, asym_kind, angle = float(rng.uniform(0.003, 0.015)), str(rng.choice(["contact", "section"])), float(rng.uniform(0, 90))
-            kinds.append("doublet")
-        low_grade = bool(rng.uniform() < 0.4)
-        if low_grade:
-            kinds.append("lowgrade")
+        asym, asym_kind, angle, low_grade = _draw_doublet_and_recording(rng, 1 / 3, kinds)
     holder = TruthHolder(draw_params(rng), profile, mass, asym, asym_kind, angle)
     return _build_case(rng, name, split, seed, family, d, (total, flute), described_holder, holder_name, holder,
                        stickout, offsets, ruler, od_f, ratio, low_grade, kinds, tier="issue")

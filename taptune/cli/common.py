@@ -95,11 +95,12 @@ def refuse_library_output(path: str | os.PathLike | None, what: str, library=Non
         return
     from taptune.library.store import default_library_path
 
-    libraries = [default_library_path(library)] + [Path(p) for p in protect if p]
-    try:
-        libraries.append(default_library_path(None))
-    except (RuntimeError, KeyError):
-        pass  # no home folder (a container's bare user): there is no default library to protect
+    libraries = [Path(p) for p in protect if p]
+    for arg in dict.fromkeys((library or None, None)):  # the given library, then the default one
+        try:
+            libraries.append(default_library_path(arg))
+        except (RuntimeError, KeyError):
+            pass  # no home folder (a container's bare user): there is no default library to protect
     target = Path(path)
     for lib in libraries:
         if _same_file(target, lib):

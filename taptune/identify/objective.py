@@ -269,7 +269,10 @@ class Objective:
         keys = [p.tobytes() for p in P]
         new = list(dict.fromkeys(k for k in keys if k not in self.memo))
         if len(new) > 1 and all(hasattr(ev, "evaluate_many") for ev in self.evaluators):
-            rows = [keys.index(k) for k in new]
+            first = {}
+            for i, k in enumerate(keys):
+                first.setdefault(k, i)
+            rows = [first[k] for k in new]
             terms = self._batched_terms(P[rows])
             if terms is not None:
                 for k, t in zip(new, terms):

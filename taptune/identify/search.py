@@ -251,17 +251,25 @@ def _shared_file(blob: bytes) -> str:
     """Write ``blob`` to a new temporary file, in shared memory where there is room, else
     in the temporary folder; its path. A file that could not be written is removed."""
     shm = ("/dev/shm",) if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else ()
-    for folder in shm + (None,):
-        fd, path = tempfile.mkstemp(prefix="taptune-objective-", suffix=".pkl", dir=folder)
+    for folder in shm:
         try:
-            with os.fdopen(fd, "wb") as f:
-                f.write(blob)
-            return path
+            return _write_temp(blob, folder)
         except OSError:
-            os.unlink(path)
-            if folder is None:
-                raise
-    raise AssertionError("unreachable")
+            pass  # full, or out of inodes: the temporary folder instead
+    return _write_temp(blob, None)
+
+
+def _write_temp(blob: bytes, folder) -> str:
+    """Write ``blob`` to a new temporary file in ``folder`` (None: the temporary folder);
+    its path. A file that could not be written is removed; the error is raised."""
+    fd, path = tempfile.mkstemp(prefix="taptune-objective-", suffix=".pkl", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(blob)
+    except OSError:
+        os.unlink(path)
+        raise
+    return path
 
 
 class WarmPool:

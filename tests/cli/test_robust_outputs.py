@@ -281,6 +281,8 @@ def test_outputs_are_checked_without_a_home_folder(monkeypatch, tmp_path):
     monkeypatch.setattr(Path, "home", staticmethod(no_home))
     lib = tmp_path / "lib.json"
     refuse_library_output(tmp_path / "out.json", "JSON", library=lib)  # no default library: nothing to refuse
+    monkeypatch.delenv("XDG_DATA_HOME", raising=False)
+    refuse_library_output(tmp_path / "out.json", "JSON")  # no --library either (taptune model --json): no traceback
     with pytest.raises(InputError, match="is the holder library"):
         refuse_library_output(lib, "JSON", library=lib)
 

@@ -130,3 +130,20 @@ def test_a_shared_file_that_cannot_be_written_is_removed(monkeypatch, tmp_path):
     path = search._shared_file(b"blob")
     assert open(path, "rb").read() == b"blob"
     assert [p for p in made if os.path.exists(p)] == [path]
+
+
+def test_shared_memory_that_cannot_even_make_the_file_falls_back(monkeypatch, tmp_path):
+    import errno
+
+    if not (os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK)):
+        pytest.skip("no shared memory here: one place only")
+    real_mkstemp = tempfile.mkstemp
+
+    def mkstemp(**kw):
+        if kw.get("dir") == "/dev/shm":  # out of inodes (or open files) there
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_mkstemp(**{**kw, "dir": str(tmp_path)})
+
+    monkeypatch.setattr(search.tempfile, "mkstemp", mkstemp)
+    path = search._shared_file(b"blob")
+    assert os.path.dirname(path) == str(tmp_path) and open(path, "rb").read() == b"blob"
