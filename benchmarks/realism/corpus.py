@@ -5,7 +5,9 @@ user's TOML says (nominal stick-out read off a ruler, nominal holder diameters,
 flute_ratio 0.8); the TRUTH differs in several ways at once (see :data:`KINDS`):
 
 * ``profile``  contact intensity not linear along the grip (soft front edge, crowned, gap);
-* ``stickout`` true stick-out = described ± up to 0.4 mm (always; again at every query);
+* ``stickout`` true stick-out = described ± up to 0.4 mm (always; again at every query; a
+  ``stickout_error_mm`` of :func:`make_case` other than 0.4 reads it with a gauge instead, and the
+  described assembly then states that ``stickout_tolerance``);
 * ``diameters`` holder outer diameters off by up to ±1.5 % (segment by segment);
 * ``flute``    true flute ratio 0.72–0.86 instead of the described 0.8;
 * ``mass``     a collet nut (collet chucks) or a coolant tube / clamping unit in the HSK
@@ -36,7 +38,7 @@ Two tiers (``make_case(..., tier=)``):
   holder, a collet nut on half the collet chucks, a doublet on a third of the cases and a
   phone-like recording on 40 %.
 
-:func:`case_of` rebuilds the case of a stored record (split, index, tier, ablation).
+:func:`case_of` rebuilds the case of a stored record (split, index, tier, stick-out error, ablation).
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ import numpy as np
 from benchmarks.realism.geometry import FAMILIES, TOOLS, assemble_geometry, make_holder, make_tool, max_insertion_mm
 from benchmarks.realism.truth import ExtraMass, Profile, TruthHolder, TruthModes, truth_modes
 from taptune.errors import InputError
-from taptune.io.assembly import Assembly
+from taptune.io.assembly import Assembly, Tolerances
 from taptune.model.params import HolderParams
 from taptune.signal.synth import Nuisances
 
@@ -148,6 +150,7 @@ class Case:
     true_od_factors: tuple = field(default=())
     true_flute_ratio: float = 0.8
     tier: str = "harsh"
+    stickout_error_mm: float = RULER_MM  # the largest stick-out reading error (0 in the family)
 
     def described_at(self, stickout_mm: float) -> Assembly:
         """The described assembly at another stick-out [mm] (what the user would predict)."""
@@ -161,6 +164,7 @@ class Case:
         t = self.described.tool
         return {
             "name": self.name, "split": self.split, "tier": self.tier, "seed": self.seed, "family": self.family,
+            "stickout_error_mm": self.stickout_error_mm,
             "kinds": list(self.kinds),
             "holder_name": self.described.holder.name,
             "tool": {"diameter_mm": t.flute_diameter / MM, "total_length_mm": t.total_length / MM,
@@ -270,10 +274,15 @@ def _query_offsets(rng, insert_mm: float, min_insert: float, max_insert: float, 
     return tuple(sorted(rng.choice(ok, size=2, replace=False).tolist()))
 
 
-def make_case(split: str, index: int, in_family: bool = False, tier: str = "harsh") -> Case:
+def make_case(split: str, index: int, in_family: bool = False, tier: str = "harsh",
+              stickout_error_mm: float = RULER_MM) -> Case:
     """Case ``index`` of ``split`` in ``tier`` (deterministic; redraws until the geometry is valid).
 
     ``tier``: ``"harsh"`` (default) or ``"issue"`` (see the module docstring).
+    ``stickout_error_mm``: the largest error of every stick-out reading (uniform; default
+    a ruler). Another value draws the same case with every reading error scaled (the same
+    random numbers), and the described assembly states it as its ``stickout_tolerance``:
+    the user who measured with a gauge and said so.
     """
     if tier not in TIERS:
         raise ValueError(f"unknown tier {tier!r}: use {' or '.join(TIERS)}")
@@ -281,7 +290,7 @@ def make_case(split: str, index: int, in_family: bool = False, tier: str = "hars
     rng = np.random.default_rng(seed)
     try_ = _try_case if tier == "harsh" else _try_issue_case
     for _ in range(100):
-        case = try_(rng, split, index, seed, in_family or split == "infamily")
+        case = try_(rng, split, index, seed, in_family or split == "infamily", stickout_error_mm)
         if case is not None:
             return case
     raise RuntimeError(f"no valid geometry for {split} {index} ({tier} tier)")
@@ -290,7 +299,8 @@ def make_case(split: str, index: int, in_family: bool = False, tier: str = "hars
 def case_of(record: dict) -> Case:
     """The case of a stored :func:`benchmarks.realism.run.run_case` record (split, index,
     tier; records without a tier are ``harsh``), with its ablation applied."""
-    case = make_case(record["split"], record["index"], tier=record.get("tier", "harsh"))
+    case = make_case(record["split"], record["index"], tier=record.get("tier", "harsh"),
+                     stickout_error_mm=record.get("stickout_error_mm", RULER_MM))
     if record.get("ablate") and record["ablate"] in case.kinds:
         case = without(case, record["ablate"])
     return case
@@ -323,7 +333,7 @@ def _draw_doublet_and_recording(rng, p_doublet: float, kinds: list) -> tuple[flo
     return asym, asym_kind, angle, low_grade
 
 
-def _try_case(rng, split, index, seed, in_family) -> Case | None:
+def _try_case(rng, split, index, seed, in_family, stickout_error_mm=RULER_MM) -> Case | None:
     family, d, total, flute, name, holder_name, described_holder, max_insert, min_insert = \
         _draw_tool(rng, index, split[:3])
     if max_insert < min_insert + 10.0:
@@ -335,7 +345,7 @@ def _try_case(rng, split, index, seed, in_family) -> Case | None:
         return None
 
     kinds = ["stickout"]
-    ruler = 0.0 if in_family else RULER_MM
+    ruler = 0.0 if in_family else stickout_error_mm
     od_f = (1.0,) * len(described_holder.segments)
     ratio = 0.8
     profile, mass, asym, asym_kind, angle = Profile("linear"), ExtraMass(), 0.0, "contact", 0.0
@@ -368,6 +378,8 @@ def _build_case(rng, name, split, seed, family, d, tool_mm, described_holder, ho
     total, flute = tool_mm
     try:
         described = assemble_geometry(described_holder, make_tool(d, total, flute), stickout, f"{name}.toml")
+        if ruler not in (0.0, RULER_MM):  # measured with a gauge, and the file says so
+            described = replace(described, tolerances=Tolerances(stickout=ruler * MM))
         true_holder = make_holder(family, d, holder_name, od_f)
         true_tool = make_tool(d, total, flute, ratio)
         true_so = stickout + float(rng.uniform(-ruler, ruler))
@@ -383,10 +395,10 @@ def _build_case(rng, name, split, seed, family, d, tool_mm, described_holder, ho
     return Case(name=name, split=split, seed=seed, family=family.key, described=described,
                 true_assembly=true_asm, holder=holder, recording=recording, truth=truth,
                 queries=tuple(queries), kinds=tuple(kinds), true_od_factors=od_f, true_flute_ratio=ratio,
-                tier=tier)
+                tier=tier, stickout_error_mm=ruler)
 
 
-def _try_issue_case(rng, split, index, seed, in_family) -> Case | None:
+def _try_issue_case(rng, split, index, seed, in_family, stickout_error_mm=RULER_MM) -> Case | None:
     """A case of the ``issue`` tier (module docstring): the deviations issue 9 describes."""
     family, d, total, flute, name, holder_name, described_holder, max_insert, min_insert = \
         _draw_tool(rng, index, "i" + split[:3])
@@ -399,7 +411,7 @@ def _try_issue_case(rng, split, index, seed, in_family) -> Case | None:
     offsets = _query_offsets(rng, insert, min_insert, max_insert, stickout, flute, (3.0 * d, 6.0 * d))
     if offsets is None:
         return None
-    ruler = 0.0 if in_family else RULER_MM
+    ruler = 0.0 if in_family else stickout_error_mm
     od_f = (1.0,) * len(described_holder.segments)
     ratio = 0.8
     profile, mass, asym, asym_kind, angle = Profile("linear"), ExtraMass(), 0.0, "contact", 0.0
@@ -451,7 +463,7 @@ def elsewhere(case: Case, stickout_mm: float) -> Case:
 def _moved(case: Case, holder: TruthHolder, stickout_mm, name: str, salt: int) -> Case:
     rng = np.random.default_rng([case.seed, salt])
     so = case.described.stickout / MM if stickout_mm is None else float(stickout_mm)
-    ruler = RULER_MM if "stickout" in case.kinds else 0.0
+    ruler = case.stickout_error_mm if "stickout" in case.kinds else 0.0
     true_so = so + float(rng.uniform(-ruler, ruler))
     described = case.described_at(so)
     true_asm = case.true_at(true_so)

@@ -30,7 +30,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from benchmarks.realism.audio import AUDIBLE_DB  # noqa: E402
-from benchmarks.realism.corpus import KINDS, TIERS, case_of, make_case, without  # noqa: E402
+from benchmarks.realism.corpus import KINDS, RULER_MM, TIERS, case_of, make_case, without  # noqa: E402
 
 MODES = (1, 2, 3)
 LOUD_DB = 15.0
@@ -66,19 +66,21 @@ def judge_labels(case, analysis, margins) -> list[dict]:
     return out
 
 
-def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, tier: str = "harsh") -> dict:
+def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, tier: str = "harsh",
+             stickout_error_mm: float = RULER_MM) -> dict:
     """Identify one case and predict its queries; a JSON-ready record.
 
     ``ablate`` names a deviation of :data:`~benchmarks.realism.corpus.KINDS` to remove first
     (:func:`~benchmarks.realism.corpus.without`), to see what it costs; ``tier`` is the
-    corpus tier (``harsh`` or ``issue``).
+    corpus tier (``harsh`` or ``issue``); ``stickout_error_mm`` the stick-out reading error
+    (a gauge instead of the ruler, stated in the described assembly).
     """
     from benchmarks.realism.audio import audibility_margins, record
     from taptune.errors import TaptuneError
     from taptune.identify import IdentifyOptions
     from taptune.identify.pipeline import identify_recordings
 
-    case = make_case(split, index, tier=tier)
+    case = make_case(split, index, tier=tier, stickout_error_mm=stickout_error_mm)
     if ablate and ablate in case.kinds:
         case = without(case, ablate)
     out = {"index": index, "ablate": ablate, **case.to_dict()}
@@ -292,17 +294,20 @@ def main(argv=None) -> int:
     ap.add_argument("--ablate", default=None, choices=KINDS, help="remove this deviation from every case")
     ap.add_argument("--tier", default="harsh", choices=TIERS, help="corpus tier (issue: the holders of issue 9)")
     ap.add_argument("--table", action="store_true", help="print one row per case")
+    ap.add_argument("--stickout-error", type=float, default=RULER_MM, metavar="MM",
+                    help=f"largest stick-out reading error [mm] (default {RULER_MM}: a ruler; e.g. 0.05: a gauge, "
+                         "stated as the assembly's stickout_tolerance)")
     args = ap.parse_args(argv)
     t0 = time.time()
     indices = range(args.start, args.start + args.n)
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
             records = list(pool.map(run_case, [args.split] * args.n, indices, [args.seed] * args.n,
-                                    [args.ablate] * args.n, [args.tier] * args.n))
+                                    [args.ablate] * args.n, [args.tier] * args.n, [args.stickout_error] * args.n))
     else:
         records = []
         for i in indices:
-            records.append(run_case(args.split, i, args.seed, args.ablate, args.tier))
+            records.append(run_case(args.split, i, args.seed, args.ablate, args.tier, args.stickout_error))
             r = records[-1]
             print(f"{r['name']:28s} {','.join(r['kinds']):45s} cpu {r['cpu_s']:6.2f} s  "
                   + ("FAILED " + r["failed"] if "failed" in r else
@@ -316,7 +321,7 @@ def main(argv=None) -> int:
     if args.out:
         import taptune
 
-        meta = {"split": args.split, "tier": args.tier, "ablate": args.ablate, "taptune": os.path.dirname(taptune.__file__),
+        meta = {"split": args.split, "tier": args.tier, "ablate": args.ablate, "stickout_error_mm": args.stickout_error, "taptune": os.path.dirname(taptune.__file__),
                 "code": os.environ.get("REALISM_CODE", ""), "n": args.n, "start": args.start, "seed": args.seed, "jobs": args.jobs,
                 "wall_s": round(time.time() - t0, 1), "load": round(os.getloadavg()[0], 2)}
         write_results(args.out, {"meta": meta, "summary": summary, "cases": records})

@@ -150,3 +150,20 @@ def test_harsh_tier_is_still_the_corpus_of_the_stored_baselines():
             assert q.stickout_mm == stored_q["stickout_mm"]
             assert q.true_stickout_mm == pytest.approx(stored_q["true_stickout_mm"], abs=1e-4)
             assert q.truth.bending_hz == pytest.approx(stored_q["bending_hz"], abs=0.006)
+
+
+def test_a_gauge_draws_the_same_case_with_smaller_reading_errors(issue_cases):
+    ruler = issue_cases[1]
+    gauge = make_case("calibration", 1, tier="issue", stickout_error_mm=0.05)
+    # The same random numbers: every reading error scaled by 0.05 / 0.4, nothing else moved.
+    assert gauge.name == ruler.name and gauge.kinds == ruler.kinds and gauge.holder == ruler.holder
+    described = ruler.described.stickout / MM
+    assert gauge.true_assembly.stickout / MM - described == pytest.approx(
+        (ruler.true_assembly.stickout / MM - described) * 0.05 / 0.4, abs=1e-9)
+    for q_r, q_g in zip(ruler.queries, gauge.queries, strict=True):
+        assert q_g.true_stickout_mm - q_g.stickout_mm == pytest.approx((q_r.true_stickout_mm - q_r.stickout_mm) / 8)
+    # The user measured with a gauge and said so; the ruler's file keeps the default.
+    assert gauge.described.tolerances.stickout == pytest.approx(0.05 * MM)
+    assert ruler.described.tolerances.stickout == pytest.approx(0.3 * MM)
+    record_ = {"split": "calibration", "index": 1, "tier": "issue", "stickout_error_mm": 0.05}
+    assert case_of(record_).to_dict() == gauge.to_dict()
