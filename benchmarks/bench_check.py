@@ -32,6 +32,7 @@ stick-out read to ±0.3 mm); the first run (pooled bands) had 2/0/10 and 0/4/8 (
 0/5/7 (issue) where these have 1/0/11, 0/3/9 and 0/3/9.
 
     python -m benchmarks.bench_check --n 12 [--split check|infamily] [--tier harsh|issue] [--jobs 2] [--out check.json]
+        [--stickout-error MM]
 
 ``--tier issue`` draws the reference holders from the corpus's issue tier (the holders
 issue 9 describes, see benchmarks.realism.corpus) instead of the harsh one.
@@ -48,8 +49,10 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 
-def run_reference(index: int, folder: str, split: str = "check", tier: str = "harsh") -> list[dict]:
-    """Identify reference ``index`` of ``split`` (corpus ``tier``) and check its pairs; one row per pair."""
+def run_reference(index: int, folder: str, split: str = "check", tier: str = "harsh",
+                  stickout_error_mm: float | None = None) -> list[dict]:
+    """Identify reference ``index`` of ``split`` (corpus ``tier``; stick-outs read to
+    ``stickout_error_mm``, default the ruler's) and check its pairs; one row per pair."""
     from benchmarks.realism.audio import record
     from benchmarks.realism.corpus import elsewhere, make_case, worn
     from taptune.errors import TaptuneError
@@ -59,7 +62,8 @@ def run_reference(index: int, folder: str, split: str = "check", tier: str = "ha
     from taptune.library.checks import check_holder
     from taptune.library.record import entry_from_identification
 
-    ref = make_case(split, index, tier=tier)
+    ref = make_case(split, index, tier=tier) if stickout_error_mm is None else \
+        make_case(split, index, tier=tier, stickout_error_mm=stickout_error_mm)
     rec = record(ref, path=str(Path(folder) / f"{ref.name}.wav"))
     write_audio(rec.path, rec.samples, rec.sample_rate, rec.subtype)  # the library hashes the file
     t0 = time.process_time()
@@ -129,6 +133,8 @@ def main(argv=None) -> int:
     ap.add_argument("--tier", default="harsh", choices=("harsh", "issue"),
                     help="corpus tier of the reference holders (issue: the holders of issue 9)")
     ap.add_argument("--out", help="write every row as JSON")
+    ap.add_argument("--stickout-error", type=float, default=None, metavar="MM",
+                    help="largest stick-out reading error [mm], stated in the assembly (default: a ruler's 0.4)")
     ap.add_argument("--jobs", type=int, default=1, help="reference holders run in parallel (processes)")
     ap.add_argument("--rejudge", metavar="JSON", help="only re-evaluate saved rows with scaled and floored bands")
     args = ap.parse_args(argv)
@@ -144,7 +150,7 @@ def main(argv=None) -> int:
     indices = range(args.first, args.first + args.n)
     with ProcessPoolExecutor(max(args.jobs, 1)) as pool:
         for new in pool.map(run_reference, indices, [folder] * len(indices), [args.split] * len(indices),
-                            [args.tier] * len(indices)):
+                            [args.tier] * len(indices), [args.stickout_error] * len(indices)):
             rows += new
             for r in new:
                 print(f"{r['reference']:<28} {r.get('kind', ''):<20} expected {r.get('expected', ''):<11} "
