@@ -72,8 +72,9 @@ every other feature and the Mondrian cells gain less or lose coverage (holder ki
 3.74 %, its cells too small). Two features, (f/n)^0.75 × (Δ / tapped stick-out)^-0.25 (the
 best pair on the records): issue 94.4 % at 2.43 %, harsh 91.0 % (pinned 85 %) at 2.93 %,
 in-family 1.92 %; cross-validated 0.20 / 0.18 points narrower at the same coverage. Not
-shipped: none gains the 0.2 points asked for on both tiers' validation. The set and geometry parts alone have a median of 1.81 % / 2.14 %, so no model-form
-term, however well it adapts, brings the median to 1.5 % at the default tolerances.
+shipped: none gains the 0.2 points asked for on both tiers' validation. The set and
+geometry parts alone have a median of 1.81 % / 2.14 %, so no model-form term, however
+well it adapts, brings the median to 1.5 % at the default tolerances.
 """
 
 from __future__ import annotations
