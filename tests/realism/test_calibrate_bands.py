@@ -1,0 +1,46 @@
+"""calibrate_bands.py's normalised-score and Mondrian-cell variants (benchmarks, seeded rows)."""
+
+import numpy as np
+import pytest
+
+from benchmarks.calibrate_bands import calibrate, power_scale, stats
+
+
+def _rows(seed=3, n=400):
+    """Rows whose model-form error grows with the frequency per mode number (x), as a
+    normalised score should learn: |error| ∝ x, no set or geometry part, Δ = 0."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        mode = int(rng.integers(1, 4))
+        x = float(np.exp(rng.uniform(np.log(3e2), np.log(3e4))))  # log-uniform: the scale spans 100 ×
+        f = x * mode
+        out.append({"group": "pinned", "tier": "issue", "mode": mode, "f": f, "set": 0.0, "geom": 0.0, "delta": 0.0,
+                    "measured": True, "err": f * 1e-6 * x * float(rng.exponential(1.0))})
+    return out
+
+
+def test_a_constant_scale_divides_the_coefficient_and_leaves_the_band():
+    rows = _rows()
+    plain = calibrate(rows)
+    halved = calibrate(rows, sigma=lambda r: 2.0)
+    assert halved["pinned"] == pytest.approx(plain["pinned"] / 2)
+    assert stats(rows, halved, sigma=lambda r: 2.0)["half_median_pct"] == pytest.approx(
+        stats(rows, plain)["half_median_pct"])
+
+
+def test_a_scale_that_follows_the_error_narrows_the_band_at_the_same_coverage():
+    cal, val = _rows(3), _rows(4)
+    plain = stats(val, calibrate(cal))
+    sigma = power_scale(cal, "f/n (frequency / mode number)", 1.0)
+    scaled = stats(val, calibrate(cal, sigma=sigma), sigma=sigma)
+    assert scaled["coverage"] >= 0.87 and plain["coverage"] >= 0.87
+    assert scaled["half_median_pct"] < 0.8 * plain["half_median_pct"]
+
+
+def test_mondrian_cells_get_their_own_coefficient():
+    rows = _rows()
+    c = calibrate(rows, cell=lambda r: r["mode"] == 1)
+    assert set(c) == {"pinned/True", "pinned/False"}
+    s = stats(rows, c, cell=lambda r: r["mode"] == 1)
+    assert s["coverage"] >= 0.9
