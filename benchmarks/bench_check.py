@@ -22,7 +22,17 @@ rule; 12 references each, consistent/differs/inconclusive; check split)::
     worn 0.3            0/11/1                     0/12/0
     worn 0.5 elsewhere  0/3/9                      0/3/9
 
-No good holder reads ``differs``, no worn one ``consistent``. Before the interface-band
+With the stick-outs read (and stated) to ±0.05 mm, a gauge (``--stickout-error 0.05``,
+2026-11-25, same references)::
+
+                        issue tier                 harsh tier
+    re-clamped          11/0/1                     11/0/1
+    elsewhere           6/0/6                      3/0/9
+    worn 0.5            0/11/1                     0/12/0
+    worn 0.3            0/12/0                     0/11/1
+    worn 0.5 elsewhere  0/4/8                      0/3/9
+
+No good holder reads ``differs``, no worn one ``consistent`` (with either). Before the interface-band
 rule of :mod:`taptune.identify.check`, che008 re-clamped read ``differs``: its mode 1
 (9.76 kHz) sits between interface modes at 9.49 and 9.96 kHz and the identification took
 the upper one. Before the rule that the wear shift must itself leave the good band,
