@@ -56,11 +56,14 @@ class IdentifyOptions:
     near_candidates: int = 300  # archive points checked term by term (their terms are remembered)
     # The set's extent: each parameter pushed low and high inside it (a long valley runs
     # far beyond what the optimisers' archives visit). Each push starts from the member
-    # already farthest that way, so 200 evaluations reach about as far as 450 from the best.
+    # already farthest that way, so 150 evaluations reach about as far as 450 from the best.
     # k_tt, k_rr, alpha and the two factors set the frequencies; the loss intensities
     # hardly move them and are left to the archive members.
     extreme_axes: tuple[int, ...] = (0, 1, 4, 5, 6)
-    extreme_evaluations: int = 200
+    extreme_evaluations: int = 150
+    # COBYLA's first step in the unit cube: the set is a thin, curved valley and the
+    # push starts on its edge; 0.05 left 40 % of the pushes stuck where they began.
+    extreme_step: float = 0.01
     near_count: int = 24  # how many diverse members the set keeps (best included)
 
 

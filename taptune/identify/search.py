@@ -164,7 +164,7 @@ def extreme_task(args) -> RunResult:
         return stopped
     with _limits():
         found, evaluations = set_extreme(lambda u: summed_terms(objective, unit_to_p, u), start, axis, sign,
-                                         limits, options.extreme_evaluations)
+                                         limits, options.extreme_evaluations, options.extreme_step)
     ends = found[np.argsort(sign * found[:, axis])]
     # The extreme member, and one half way there so the band is filled in.
     keep = ends[[len(ends) // 2, -1]] if len(ends) > 1 else ends

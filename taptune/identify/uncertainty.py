@@ -38,7 +38,7 @@ def summed_terms(objective, u_to_p, u) -> np.ndarray:
 
 
 def set_extreme(terms_at, start: np.ndarray, quantity, sign: float, limits: SetLimits,
-                max_evaluations: int = 150):
+                max_evaluations: int = 150, initial_step: float = 0.01):
     """Push ``quantity(u)`` as low (sign −1) or high (+1) as the set allows.
 
     Constrained COBYLA (nlopt) on [0, 1]^d from a member ``start``: maximise
@@ -75,7 +75,7 @@ def set_extreme(terms_at, start: np.ndarray, quantity, sign: float, limits: SetL
     opt.add_inequality_constraint(lambda u, grad: float(terms(np.array(u))[1] - limits.shape), 0.0)
     opt.set_maxeval(int(max_evaluations))
     opt.set_xtol_abs(1e-4)
-    opt.set_initial_step(np.full(d, 0.05))
+    opt.set_initial_step(np.full(d, initial_step))
     try:
         opt.optimize(np.clip(start, 0.0, 1.0))
     except (nlopt.RoundoffLimited, ValueError, RuntimeError):
