@@ -56,7 +56,9 @@ PINNED_SPREAD = 0.002
 #: the harsh tier go uncovered (validation 87 %). Validation (48 + 48 other holders, never
 #: calibrated on): issue tier 93.8 % covered (pinned 92, free 94, unknown 97 %), median
 #: ± 2.6 % (measured modes 1.8 %); harsh tier 91.3 % (pinned 84 %) at 3.2 %; in-family
-#: 100 % at 2.1 %. Pooled instead: issue 91.0 % at 2.2 %, harsh 87.2 % at 2.6 %. Tried and
+#: 100 % at 2.1 %. Re-measured with the extreme pushes of a 0.01 first step (identify
+#: core, same c): issue 94.8 % (pinned 94, free 94, unknown 97 %) at 2.62 %, harsh 91.7 %
+#: (pinned 88 %) at 3.24 %, in-family 100 % at 2.20 %. Pooled instead: issue 91.0 % at 2.2 %, harsh 87.2 % at 2.6 %. Tried and
 #: not kept (calibrate_bands.py --variants): c per group and mode (wider, harsh 87.5 %),
 #: the set part × 0.5 or × 0 (wider, lower coverage), Δref 5/20/40 mm and no growth (the
 #: four within 0.06 % in median half-width), a pinned threshold of 0.1–2 % instead of
