@@ -22,8 +22,11 @@ rule; 12 references each, consistent/differs/inconclusive; check split)::
     worn 0.3            0/11/1                     0/12/0
     worn 0.5 elsewhere  0/3/9                      0/3/9
 
+Third run, with the extreme pushes' 0.01 first step (same references): the same but
+issue-tier elsewhere 3/0/9 and worn 0.5 elsewhere 0/4/8.
+
 With the stick-outs read (and stated) to ±0.05 mm, a gauge (``--stickout-error 0.05``,
-2026-11-25, same references)::
+2026-11-25, same references; the same with either first step)::
 
                         issue tier                 harsh tier
     re-clamped          11/0/1                     11/0/1
