@@ -22,8 +22,8 @@ rule; 12 references each, consistent/differs/inconclusive; check split)::
     worn 0.3            0/11/1                     0/12/0
     worn 0.5 elsewhere  0/3/9                      0/3/9
 
-Third run, with the extreme pushes' 0.01 first step (same references): the same but
-issue-tier elsewhere 3/0/9 and worn 0.5 elsewhere 0/4/8.
+Third run, with the extreme pushes' 0.01 first step (same references): the same except
+on the issue tier, elsewhere 3/0/9 and worn 0.5 elsewhere 0/4/8 (the harsh tier unchanged).
 
 With the stick-outs read (and stated) to ±0.05 mm, a gauge (``--stickout-error 0.05``,
 2026-11-25, same references; the same with either first step)::
@@ -61,11 +61,13 @@ from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from benchmarks.realism.corpus import RULER_MM
+
 
 def run_reference(index: int, folder: str, split: str = "check", tier: str = "harsh",
-                  stickout_error_mm: float | None = None) -> list[dict]:
+                  stickout_error_mm: float = RULER_MM) -> list[dict]:
     """Identify reference ``index`` of ``split`` (corpus ``tier``; stick-outs read to
-    ``stickout_error_mm``, default the ruler's) and check its pairs; one row per pair."""
+    ``stickout_error_mm``) and check its pairs; one row per pair."""
     from benchmarks.realism.audio import record
     from benchmarks.realism.corpus import elsewhere, make_case, worn
     from taptune.errors import TaptuneError
@@ -75,8 +77,7 @@ def run_reference(index: int, folder: str, split: str = "check", tier: str = "ha
     from taptune.library.checks import check_holder
     from taptune.library.record import entry_from_identification
 
-    ref = make_case(split, index, tier=tier) if stickout_error_mm is None else \
-        make_case(split, index, tier=tier, stickout_error_mm=stickout_error_mm)
+    ref = make_case(split, index, tier=tier, stickout_error_mm=stickout_error_mm)
     rec = record(ref, path=str(Path(folder) / f"{ref.name}.wav"))
     write_audio(rec.path, rec.samples, rec.sample_rate, rec.subtype)  # the library hashes the file
     t0 = time.process_time()
@@ -103,7 +104,7 @@ def run_reference(index: int, folder: str, split: str = "check", tier: str = "ha
             continue
         rows.append({
             "reference": ref.name, "kinds": list(ref.kinds), "family": ref.family, "kind": kind,
-            "expected": expected, "verdict": check.verdict,
+            "expected": expected, "verdict": check.verdict, "stickout_error_mm": ref.stickout_error_mm,
             "stickout_mm": round(other.described.stickout * 1e3, 3),
             "truth_hz": [round(f, 2) for f in other.truth.bending_hz],
             "modes": check.result.to_dict()["modes"], "reasons": list(check.result.reasons),
@@ -146,11 +147,13 @@ def main(argv=None) -> int:
     ap.add_argument("--tier", default="harsh", choices=("harsh", "issue"),
                     help="corpus tier of the reference holders (issue: the holders of issue 9)")
     ap.add_argument("--out", help="write every row as JSON")
-    ap.add_argument("--stickout-error", type=float, default=None, metavar="MM",
-                    help="largest stick-out reading error [mm], stated in the assembly (default: a ruler's 0.4)")
+    ap.add_argument("--stickout-error", type=float, default=RULER_MM, metavar="MM",
+                    help=f"largest stick-out reading error [mm], stated in the assembly (default {RULER_MM}: a ruler)")
     ap.add_argument("--jobs", type=int, default=1, help="reference holders run in parallel (processes)")
     ap.add_argument("--rejudge", metavar="JSON", help="only re-evaluate saved rows with scaled and floored bands")
     args = ap.parse_args(argv)
+    if not args.stickout_error >= 0:
+        ap.error("--stickout-error must be >= 0 mm")
     if args.rejudge:
         with open(args.rejudge) as f:
             saved = [r for r in json.load(f) if "modes" in r]

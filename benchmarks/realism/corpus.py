@@ -286,6 +286,8 @@ def make_case(split: str, index: int, in_family: bool = False, tier: str = "hars
     """
     if tier not in TIERS:
         raise ValueError(f"unknown tier {tier!r}: use {' or '.join(TIERS)}")
+    if not stickout_error_mm >= 0:
+        raise ValueError(f"stickout_error_mm must be >= 0 mm, got {stickout_error_mm}")
     seed = SPLIT_SEEDS[split] + index + (ISSUE_SEED_OFFSET if tier == "issue" else 0)
     rng = np.random.default_rng(seed)
     try_ = _try_case if tier == "harsh" else _try_issue_case
@@ -378,7 +380,7 @@ def _build_case(rng, name, split, seed, family, d, tool_mm, described_holder, ho
     total, flute = tool_mm
     try:
         described = assemble_geometry(described_holder, make_tool(d, total, flute), stickout, f"{name}.toml")
-        if ruler not in (0.0, RULER_MM):  # measured with a gauge, and the file says so
+        if "stickout" in kinds and ruler != RULER_MM:  # read otherwise than with a ruler, and the file says so
             described = replace(described, tolerances=Tolerances(stickout=ruler * MM))
         true_holder = make_holder(family, d, holder_name, od_f)
         true_tool = make_tool(d, total, flute, ratio)

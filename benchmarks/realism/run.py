@@ -298,6 +298,8 @@ def main(argv=None) -> int:
                     help=f"largest stick-out reading error [mm] (default {RULER_MM}: a ruler; e.g. 0.05: a gauge, "
                          "stated as the assembly's stickout_tolerance)")
     args = ap.parse_args(argv)
+    if not args.stickout_error >= 0:
+        ap.error("--stickout-error must be >= 0 mm")
     t0 = time.time()
     indices = range(args.start, args.start + args.n)
     if args.jobs > 1:

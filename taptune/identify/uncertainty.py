@@ -38,13 +38,15 @@ def summed_terms(objective, u_to_p, u) -> np.ndarray:
 
 
 def set_extreme(terms_at, start: np.ndarray, quantity, sign: float, limits: SetLimits,
-                max_evaluations: int = 150, initial_step: float = 0.01):
+                max_evaluations: int, initial_step: float):
     """Push ``quantity(u)`` as low (sign −1) or high (+1) as the set allows.
 
     Constrained COBYLA (nlopt) on [0, 1]^d from a member ``start``: maximise
     sign·quantity(u) subject to both terms staying within ``limits``. ``quantity`` is a
     coordinate index or a callable (e.g. a predicted frequency at another stick-out,
-    relative to its value at ``start``).
+    relative to its value at ``start``). COBYLA stops after ``max_evaluations``; its
+    first step is ``initial_step`` in every unit coordinate (small: the set is a thin
+    valley and the start lies on its edge).
 
     Returns
     -------
