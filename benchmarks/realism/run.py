@@ -334,7 +334,11 @@ def write_results(path: str, data: dict, limit: int = 200_000) -> int:
     """Write a results JSON, kept under ``limit`` bytes for the repository: indented when
     it fits, else the parameter sets rounded to 9 significant digits (predictions move by
     ~1e-9), no indentation, and without the truth holder's and the recording's description
-    (:func:`~benchmarks.realism.corpus.case_of` rebuilds both). Returns the size [bytes]."""
+    (:func:`~benchmarks.realism.corpus.case_of` rebuilds both). Replaced atomically: a
+    stored run (``calibrate_bands --rewrite-results`` rewrites them in place) is never left
+    half-written. Returns the size [bytes]."""
+    from taptune.io.atomic import atomic_write_bytes
+
     text = json.dumps(data, indent=1)
     if len(text) > limit:
         for rec in data["cases"]:
@@ -344,8 +348,7 @@ def write_results(path: str, data: dict, limit: int = 200_000) -> int:
             if ident:
                 ident["param_sets"] = [{k: float(f"{v:.9g}") for k, v in p.items()} for p in ident["param_sets"]]
         text = json.dumps(data, separators=(",", ":"))
-    with open(path, "w", encoding="utf-8") as fh:
-        fh.write(text)
+    atomic_write_bytes(path, text.encode("utf-8"))
     return len(text)
 
 

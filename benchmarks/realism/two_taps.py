@@ -126,8 +126,10 @@ def main(argv=None) -> int:
         print(line("one tap, measured modes", summary["one_tap_measured"]))
     print(f"wall {time.time() - t0:.0f} s, load {os.getloadavg()[0]:.1f}")
     if args.out:
-        with open(args.out, "w", encoding="utf-8") as fh:
-            json.dump({"meta": vars(args), "summary": summary, "cases": records}, fh, indent=1)
+        from taptune.io.atomic import atomic_write_bytes
+
+        atomic_write_bytes(args.out, json.dumps({"meta": vars(args), "summary": summary, "cases": records},
+                                                indent=1).encode("utf-8"))
     return 0
 
 

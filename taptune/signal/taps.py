@@ -135,6 +135,8 @@ def _flat_top_runs(seg, hi: float, lo: float, tol: float, min_run: int = 2, min_
     count = np.count_nonzero(at_hi | at_lo)
     if count >= min_count:
         return True
+    if count < min_run:  # too few samples at either extreme for a run (the usual case)
+        return False
     # A run must stay at one extreme: at a low sample rate (8 kHz) a free ring-down of a
     # mode near Nyquist swings from its maximum to its minimum in one sample, which is no
     # flat top.
