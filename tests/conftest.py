@@ -8,7 +8,14 @@ if not os.environ.get("DISPLAY"):
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+import atexit  # noqa: E402
+import shutil  # noqa: E402
+import tempfile  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+# The reduced models' disk cache (taptune.io.cache) of this run, never the user's.
+os.environ["TAPTUNE_CACHE_DIR"] = tempfile.mkdtemp(prefix="taptune-test-cache-")
+atexit.register(shutil.rmtree, os.environ["TAPTUNE_CACHE_DIR"], True)
 
 import pytest  # noqa: E402
 

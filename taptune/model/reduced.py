@@ -602,17 +602,50 @@ class FastEvaluator:
         train_p = P_LOWER + train_u * (P_UPPER - P_LOWER)
         snapshots = _train(component, train_u, train_p, reduction)
         Q, rigid = _pod_basis(component, snapshots, len(fe.z_holder) * 2, V, reduction.pod_tolerance)
-        self.model = component.compress(Q, rigid)
-        self.component_size = component.n
-        self._solver = _Solver(self.model, reduction)
         # Start blocks in the compressed coordinates (Q is orthonormal). The nearest
         # training point minimises the weighted distance ½‖k − q‖² = ½‖k‖² − k·q + ½‖q‖²
         # with q = W (p − p_lo)/(p_hi − p_lo): affine in p, so one product per candidate.
         keys = train_u * _SHAPE_WEIGHTS
         to_key = _SHAPE_WEIGHTS / (P_UPPER - P_LOWER)
-        self._key_matrix = keys * to_key
-        self._key_offset = 0.5 * np.einsum("ij,ij->i", keys, keys) + keys @ (to_key * P_LOWER)
-        self._starts = np.einsum("ai,tab->tib", Q, snapshots.blocks, optimize=True)
+        self._finish(
+            component.compress(Q, rigid),
+            component.n,
+            key_matrix=keys * to_key,
+            key_offset=0.5 * np.einsum("ij,ij->i", keys, keys) + keys @ (to_key * P_LOWER),
+            starts=np.einsum("ai,tab->tib", Q, snapshots.blocks, optimize=True),
+        )
+
+    def _finish(self, model: _Projected, component_size: int, key_matrix, key_offset, starts) -> None:
+        self.model = model
+        self.component_size = int(component_size)
+        self._solver = _Solver(model, self.reduction)
+        self._key_matrix, self._key_offset, self._starts = key_matrix, key_offset, starts
+
+    def state(self) -> dict[str, np.ndarray]:
+        """The arrays that, with its full model, make this evaluator again (:meth:`from_state`)."""
+        m = self.model
+        return {"k_pieces": m.k_pieces, "m_tool": m.m_tool, "m_holder": m.m_holder, "rigid": m.rigid,
+                "tip": m.tip, "component_size": np.array(self.component_size), "key_matrix": self._key_matrix,
+                "key_offset": self._key_offset, "starts": self._starts}
+
+    @classmethod
+    def from_state(cls, fe: FEModel, reduction: ReductionOptions, state: dict) -> "FastEvaluator":
+        """The evaluator of :meth:`state`, identical to the one that gave it.
+
+        Raises ValueError when the arrays do not fit together (a corrupt state).
+        """
+        model = _Projected(*(np.asarray(state[k]) for k in ("k_pieces", "m_tool", "m_holder", "rigid", "tip")))
+        n, (t, n_s, b) = model.n, np.shape(state["starts"])
+        if (model.k_pieces.shape != (len(_K_PIECES), n, n) or model.m_tool.shape != (n, n)
+                or model.m_holder.shape != (n, n) or model.rigid.shape != (n, 2) or n_s != n
+                or b != reduction.block or np.shape(state["key_matrix"]) != (t, 7)
+                or np.shape(state["key_offset"]) != (t,)):
+            raise ValueError("reduced-model arrays of inconsistent shapes")
+        self = cls.__new__(cls)
+        self.fe, self.reduction = fe, reduction
+        self._finish(model, int(state["component_size"]), np.asarray(state["key_matrix"]),
+                     np.asarray(state["key_offset"]), np.asarray(state["starts"]))
+        return self
 
     @property
     def size(self) -> int:
@@ -698,10 +731,40 @@ def cached_evaluator(assembly: Assembly, options: ModelOptions = ModelOptions())
     """The :class:`FastEvaluator` of an assembly, built once per process for the last few.
 
     Its build (0.3–0.45 s CPU, mostly the training solutions) is a third of an
-    identification; in the app the user taps the same assembly again and again. The
+    identification, and the user taps the same assembly again and again: in the app, and
+    with one ``taptune identify`` per tap, where a fresh process finds it in the disk
+    cache (:mod:`taptune.io.cache`; 15 ms with the full model it is keyed by). The
     evaluator is immutable, so sharing it between identifications and threads is safe.
     """
-    return FastEvaluator(assembly, options)
+    from taptune.io.cache import load_arrays, save_arrays
+
+    fe = build_model(assembly, options)
+    reduction = ReductionOptions()
+    key = _cache_key(fe, reduction)
+    state = load_arrays("reduced", key)
+    if state is not None:
+        try:
+            return FastEvaluator.from_state(fe, reduction, state)
+        except (KeyError, ValueError, TypeError):
+            pass  # a corrupt entry: rebuilt and saved over below
+    evaluator = FastEvaluator.from_model(fe, reduction)
+    save_arrays("reduced", key, evaluator.state())
+    return evaluator
+
+
+def _cache_key(fe: FEModel, reduction: ReductionOptions) -> str:
+    """Hash of all a reduced model is computed from: the full model, the reduction
+    options, the search space, the shift and this module's code."""
+    from pathlib import Path
+
+    from taptune.io.cache import digest
+
+    parts = [Path(__file__).read_bytes(), reduction, SIGMA, P_LOWER, P_UPPER, ETA_REFERENCE_MM, fe.options,
+             fe.rigid_contact, fe.z_holder, fe.z_tool, fe.contact_nodes, fe.tip_dof, *fe.rigid_vectors]
+    for name in (*_K_PIECES, "M_tool", "M_holder"):
+        m = getattr(fe, name).tocsr()
+        parts += [m.shape, m.data, m.indices, m.indptr]
+    return digest(*parts)
 
 
 @dataclass(frozen=True)

@@ -132,6 +132,73 @@ def test_the_cached_evaluator_is_built_once_per_assembly(reference):
     np.testing.assert_array_equal(first.evaluate(p, window).tip_receptance, reference[1].evaluate(p, window).tip_receptance)
 
 
+def test_a_fresh_process_finds_the_evaluator_in_the_disk_cache(reference, tmp_path, monkeypatch):
+    """One ``taptune identify`` per tap: the next process loads the reduced model instead of
+    training it again, and the loaded model gives the very same numbers."""
+    from taptune.model import reduced
+
+    monkeypatch.setenv("TAPTUNE_CACHE_DIR", str(tmp_path))
+    reduced.cached_evaluator.cache_clear()
+    built = reduced.cached_evaluator(assembly("reference"))
+    assert len(list(tmp_path.glob("reduced-*.npz"))) == 1
+    reduced.cached_evaluator.cache_clear()  # as a new process starts
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained again although the disk cache has the model")
+
+    monkeypatch.setattr(reduced.FastEvaluator, "from_model", no_training)
+    loaded = reduced.cached_evaluator(assembly("reference"))
+    window = 4800.0 + WINDOW
+    P = sample(4, 2, 5)
+    np.testing.assert_array_equal(loaded.evaluate_many(P, window).tip_receptance,
+                                  built.evaluate_many(P, window).tip_receptance)
+    np.testing.assert_array_equal(loaded.evaluate(P[0], window).tip_receptance, reference[1].evaluate(P[0], window).tip_receptance)
+    # Another stick-out is another model: not served by this entry.
+    reduced.cached_evaluator.cache_clear()
+    with pytest.raises(AssertionError, match="trained again"):
+        reduced.cached_evaluator(assembly("reference").with_stickout(0.0635))
+    reduced.cached_evaluator.cache_clear()
+
+
+def test_a_corrupt_disk_cache_entry_is_rebuilt(reference, tmp_path, monkeypatch):
+    from taptune.model import reduced
+
+    monkeypatch.setenv("TAPTUNE_CACHE_DIR", str(tmp_path))
+    reduced.cached_evaluator.cache_clear()
+    reduced.cached_evaluator(assembly("reference"))
+    (entry,) = tmp_path.glob("reduced-*.npz")
+    good = entry.read_bytes()
+    window = 4800.0 + WINDOW
+    p = sample(1, 1, 6)[0]
+    for bad in (good[: len(good) // 2], b"", b"not a zip file"):
+        entry.write_bytes(bad)
+        reduced.cached_evaluator.cache_clear()
+        again = reduced.cached_evaluator(assembly("reference"))
+        np.testing.assert_array_equal(again.evaluate(p, window).tip_receptance, reference[1].evaluate(p, window).tip_receptance)
+        assert entry.read_bytes() == good  # rebuilt and saved over
+    # Arrays that load but do not fit together (another version's layout): rebuilt too.
+    with np.load(entry) as z:
+        arrays = dict(z)
+    arrays["starts"] = arrays["starts"][:, :3]
+    np.savez(entry, **arrays)
+    reduced.cached_evaluator.cache_clear()
+    again = reduced.cached_evaluator(assembly("reference"))
+    np.testing.assert_array_equal(again.evaluate(p, window).tip_receptance, reference[1].evaluate(p, window).tip_receptance)
+    reduced.cached_evaluator.cache_clear()
+
+
+def test_the_disk_cache_can_be_turned_off(tmp_path, monkeypatch):
+    from taptune.model import reduced
+
+    monkeypatch.setenv("TAPTUNE_CACHE_DIR", "off")
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    reduced.cached_evaluator.cache_clear()
+    reduced.cached_evaluator(assembly("reference"))
+    reduced.cached_evaluator.cache_clear()
+    assert not any(tmp_path.rglob("*.npz"))
+
+
 def test_evaluate_many_equals_evaluate(reference):
     """The batch form gives the single results, stacked."""
     _, ev = reference

@@ -1,0 +1,119 @@
+"""A folder of re-computable arrays: what a fresh process would otherwise rebuild.
+
+The reduced model of an assembly costs a third of a second to build, and a user taps the
+same assembly again and again, often one ``taptune identify`` per tap. Its arrays are
+kept here between processes, keyed by a hash of everything they are computed from.
+
+Nothing in the cache is user data: a missing, unreadable, foreign or corrupt entry is
+rebuilt and replaced, an unwritable folder only means nothing is kept. The folder is
+``$TAPTUNE_CACHE_DIR`` (``off`` turns the cache off), else the user cache folder:
+``$XDG_CACHE_HOME/taptune`` (default ``~/.cache/taptune``) on Linux and other Unix
+systems, ``~/Library/Caches/taptune`` on macOS, ``%LOCALAPPDATA%\\taptune\\cache`` on
+Windows. It holds at most :data:`MAX_ENTRIES` entries (the least recently used go).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import secrets
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+ENV_VAR = "TAPTUNE_CACHE_DIR"
+# About 2.5 MB each (a reduced model): at most 40 MB.
+MAX_ENTRIES = 16
+
+
+def cache_dir() -> Path | None:
+    """The cache folder (see the module docstring); None when ``$TAPTUNE_CACHE_DIR`` is ``off``."""
+    env = os.environ.get(ENV_VAR, "").strip()
+    if env.lower() == "off":
+        return None
+    if env:
+        return Path(env).expanduser()
+    home = Path.home()
+    if sys.platform == "win32":
+        local = os.environ.get("LOCALAPPDATA", "")
+        return (Path(local) if local else home / "AppData" / "Local") / "taptune" / "cache"
+    if sys.platform == "darwin":
+        return home / "Library" / "Caches" / "taptune"
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    # The XDG spec says a relative value is invalid and must be ignored.
+    return (Path(xdg) if xdg and os.path.isabs(xdg) else home / ".cache") / "taptune"
+
+
+def digest(*parts) -> str:
+    """Hex SHA-256 of ``parts``: arrays by dtype, shape and bytes, anything else by ``repr``."""
+    h = hashlib.sha256()
+    for part in parts:
+        if isinstance(part, np.ndarray):
+            a = np.ascontiguousarray(part)
+            h.update(f"{a.dtype.str}{a.shape}".encode())
+            h.update(a.tobytes())
+        else:
+            h.update(repr(part).encode())
+        h.update(b"\x00")
+    return h.hexdigest()
+
+
+def _path(kind: str, key: str) -> Path | None:
+    folder = cache_dir()
+    return None if folder is None else folder / f"{kind}-{key[:40]}.npz"
+
+
+def load_arrays(kind: str, key: str) -> dict[str, np.ndarray] | None:
+    """The arrays stored under ``key`` (see :func:`save_arrays`), or None.
+
+    None also for an entry that cannot be read or whose stored key differs (a corrupt
+    or foreign file): the caller rebuilds and saves over it.
+    """
+    path = _path(kind, key)
+    if path is None or not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {name: z[name] for name in z.files}
+        if str(arrays.pop("_key", "")) != key:
+            return None
+        os.utime(path)  # recently used: pruned last
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return None
+    return arrays
+
+
+def save_arrays(kind: str, key: str, arrays: dict[str, np.ndarray]) -> bool:
+    """Keep ``arrays`` under ``key``; False when the folder cannot take them (nothing kept).
+
+    Written beside and renamed, so a reader sees the whole entry or none; then the
+    oldest entries beyond :data:`MAX_ENTRIES` are removed.
+    """
+    path = _path(kind, key)
+    if path is None:
+        return False
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            np.savez(f, _key=np.array(key), **arrays)
+        os.replace(tmp, path)
+    except OSError:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass  # no folder, so no temporary file either
+        return False
+    _prune(path.parent)
+    return True
+
+
+def _prune(folder: Path) -> None:
+    try:
+        entries = sorted(folder.glob("*.npz"), key=lambda p: p.stat().st_mtime, reverse=True)
+        for old in entries[MAX_ENTRIES:]:
+            old.unlink(missing_ok=True)
+    except OSError:
+        pass  # another process pruned first
