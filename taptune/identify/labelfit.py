@@ -108,6 +108,17 @@ class RememberedEvaluator:
             found = self._seen[key] = self.evaluator.evaluate(p, window_hz)
         return found
 
+    def evaluate_many(self, P, window_hz):
+        """``evaluator.evaluate_many(P, window_hz)``, solved only the first time (a batch is
+        remembered whole: the finite-difference batches at the common starts recur)."""
+        P = np.asarray(P, dtype=float)
+        window_hz = np.asarray(window_hz, dtype=float)
+        key = ("many", P.shape, P.tobytes(), window_hz.tobytes())
+        found = self._seen.get(key)
+        if found is None:
+            found = self._seen[key] = self.evaluator.evaluate_many(P, window_hz)
+        return found
+
 
 def quick_fit(evaluator, measured: dict[int, float], sigma=0.01) -> tuple[float, np.ndarray, np.ndarray]:
     """MAP fit of the frequency-setting parameters to measured bending frequencies.
@@ -145,19 +156,42 @@ def quick_fit(evaluator, measured: dict[int, float], sigma=0.01) -> tuple[float,
         p[idx] = p0[idx] + x * scale
         return p
 
+    def residuals_of(f, x):
+        return np.concatenate([(np.asarray(f, dtype=float)[..., modes] / f_meas - 1) / sig, x], axis=-1)
+
+    seen = {}
+
     def residuals(x):
-        f = np.asarray(evaluator.evaluate(p_of(x), window).bending_hz, dtype=float)
-        return np.concatenate([(f[modes] / f_meas - 1) / sig, x])
+        r = residuals_of(evaluator.evaluate(p_of(x), window).bending_hz, x)
+        seen.clear()
+        seen[x.tobytes()] = r
+        return r
 
     lo = (P_LOWER[idx] - p0[idx]) / scale
     hi = (P_UPPER[idx] - p0[idx]) / scale
+    diff_step = 1e-3
+
+    def jacobian(x):
+        # least_squares' own forward differences (relative step, turned back inside the
+        # bounds), with the moved candidates solved in one batch: 40 % of the fit's time.
+        r0 = seen.get(x.tobytes())
+        if r0 is None:
+            r0 = residuals(x)
+        h = diff_step * np.where(x >= 0, 1.0, -1.0) * np.maximum(1.0, np.abs(x))
+        h = np.where((x + h > hi) & (x - h >= lo), -h, h)
+        h = (x + h) - x
+        X = x + np.diag(h)
+        batch = evaluator.evaluate_many(np.array([p_of(row) for row in X]), window).bending_hz
+        return ((residuals_of(batch, X) - r0) / h[:, None]).T
+
+    jac = jacobian if hasattr(evaluator, "evaluate_many") else "2-point"
     best = None
     # Nominal, a soft and a stiff contact: the frequencies saturate in the contact
     # stiffness, so one start can stall on a plateau.
     for start in (0.0, -1.0, 1.0):
         x0 = np.clip(np.full(idx.size, 0.0) + np.where(idx < 2, start, 0.0), lo + 1e-6, hi - 1e-6)
         try:
-            r = least_squares(residuals, x0, bounds=(lo, hi), x_scale=1.0, diff_step=1e-3, max_nfev=60)
+            r = least_squares(residuals, x0, jac=jac, bounds=(lo, hi), x_scale=1.0, diff_step=diff_step, max_nfev=60)
         except (ValueError, np.linalg.LinAlgError):
             continue
         cost = float(r.fun @ r.fun)

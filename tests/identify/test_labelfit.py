@@ -27,6 +27,25 @@ def test_quick_fit_reaches_model_frequencies_and_prefers_nominal(reference_assem
     assert far > 20 * max(cost, 0.1)
 
 
+def test_quick_fit_batched_differences_reach_the_same_fit(reference_assembly):
+    """The finite-difference candidates are solved in one batch; the fit is the one
+    least_squares' own forward differences reach."""
+    from taptune.model.reduced import FastEvaluator
+
+    class OneAtATime:
+        def __init__(self, ev):
+            self.evaluate = ev.evaluate
+
+    ev = FastEvaluator(reference_assembly)
+    truth = replace(NOMINAL, k_tt=NOMINAL.k_tt * 0.4, density_factor=1.02)
+    f = np.asarray(analyse(reference_assembly, truth, ModelOptions()).bending_hz[:3])
+    for measured in ({1: f[0], 2: f[1], 3: f[2]}, {1: f[0] * 1.01, 3: f[2]}):
+        batched = quick_fit(ev, measured, sigma=0.005)
+        single = quick_fit(OneAtATime(ev), measured, sigma=0.005)
+        assert batched[0] == pytest.approx(single[0], rel=1e-3, abs=1e-4)
+        np.testing.assert_allclose(batched[1], single[1], rtol=2e-5)
+
+
 @pytest.mark.slow
 def test_weak_mode_2_on_the_skirt_of_the_interface_mode_is_labelled_by_the_fit():
     # Shrink-fit holder at 52 mm, a stiff contact (k_rr at the top of the published
