@@ -230,19 +230,27 @@ def relative_sensitivities(assembly, params, tolerances: Tolerances, model_optio
     return {name: d / base for name, d in diffs.items()}
 
 
-def _solved_hz(assembly, params, model_options, n_modes: int) -> np.ndarray:
-    """f1..fn [Hz] of ``assembly`` with ``params`` on the full model."""
+def _solved_hz(assembly, params, model_options, n_modes: int, f_max_hz=None) -> np.ndarray:
+    """f1..fn [Hz] of ``assembly`` with ``params`` on the full model (meshed for ``f_max_hz``
+    when given, see :func:`taptune.model.fe.build_model`)."""
     from taptune.model import build_model, solve_modes
 
-    return np.asarray(solve_modes(build_model(assembly, model_options), params, n_modes=n_modes).frequency_hz[:n_modes])
+    fe = build_model(assembly, model_options, f_max_hz=f_max_hz)
+    return np.asarray(solve_modes(fe, params, n_modes=n_modes).frequency_hz[:n_modes])
 
 
 @functools.lru_cache(maxsize=32)
 def _half_differences(assembly, params, tolerances: Tolerances, model_options, n_modes: int) -> dict:
-    """Half the change of f1..fn [Hz] per stated tolerance, (f(+tol) − f(−tol)) / 2."""
+    """Half the change of f1..fn [Hz] per stated tolerance, (f(+tol) − f(−tol)) / 2.
+
+    Every moved assembly is meshed for the frequency the assembly's own mesh resolves:
+    the differences hold no change of mesh density, and each move saves a first pass.
+    """
     from taptune.errors import InputError
+    from taptune.model.fe import mesh_frequency_hz
 
     out = {}
+    f_max = None
     moves = (("stickout", _with_stickout, tolerances.stickout), ("diameter", _with_diameters, tolerances.diameter),
              ("flute_ratio", _with_flute_ratio, tolerances.flute_ratio))
     for name, move, tol in moves:
@@ -254,7 +262,10 @@ def _half_differences(assembly, params, tolerances: Tolerances, model_options, n
             continue  # e.g. the stick-out cannot grow by the tolerance: leave that part out
         if up is None or down is None:
             continue
-        f_up, f_down = _solved_hz(up, params, model_options, n_modes), _solved_hz(down, params, model_options, n_modes)
+        if f_max is None:
+            f_max = mesh_frequency_hz(assembly, model_options)
+        f_up = _solved_hz(up, params, model_options, n_modes, f_max)
+        f_down = _solved_hz(down, params, model_options, n_modes, f_max)
         out[name] = (f_up - f_down) / 2
         out[name].flags.writeable = False  # cached: shared by every caller
     return out

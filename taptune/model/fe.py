@@ -260,7 +260,7 @@ class FEModel:
         return (params.c_t * (self.T0 + a * self.T1) + params.c_r * (self.R0 + a * self.R1)).tocsr()
 
 
-def build_model(assembly: Assembly, options: ModelOptions = ModelOptions()) -> FEModel:
+def build_model(assembly: Assembly, options: ModelOptions = ModelOptions(), f_max_hz: float | None = None) -> FEModel:
     """Mesh an assembly and assemble the parameter-free model pieces (MODEL.md §2–§6).
 
     Parameters
@@ -269,6 +269,10 @@ def build_model(assembly: Assembly, options: ModelOptions = ModelOptions()) -> F
         Validated geometry in SI.
     options : ModelOptions
         Mesh and element variants.
+    f_max_hz : float, optional
+        The frequency the mesh resolves [Hz] (:func:`mesh_frequency_hz`), when the caller
+        knows it: a slightly moved assembly (a tolerance) is meshed as its base was, and
+        the first pass is saved.
 
     Returns
     -------
@@ -282,6 +286,8 @@ def build_model(assembly: Assembly, options: ModelOptions = ModelOptions()) -> F
     The first pass never splits elements, so ``mesh_scale = 0.5`` halves exactly the
     elements of the default mesh.
     """
+    if options.elements_per_wavelength > 0 and f_max_hz is not None:
+        return assemble(build_mesh(assembly, options, f_max_hz), options)
     base = replace(options, mesh_scale=max(1.0, options.mesh_scale))
     fe = assemble(build_mesh(assembly, base), base)
     if options.elements_per_wavelength > 0:
@@ -290,6 +296,14 @@ def build_model(assembly: Assembly, options: ModelOptions = ModelOptions()) -> F
     elif options != base:
         fe = assemble(build_mesh(assembly, options), options)
     return fe
+
+
+def mesh_frequency_hz(assembly: Assembly, options: ModelOptions = ModelOptions()) -> float | None:
+    """The frequency :func:`build_model`'s final mesh resolves [Hz] (None: it resolves none)."""
+    if options.elements_per_wavelength <= 0:
+        return None
+    base = replace(options, mesh_scale=max(1.0, options.mesh_scale))
+    return highest_bending_hz(assemble(build_mesh(assembly, base), base))
 
 
 def stiffest_holder() -> HolderParams:

@@ -195,3 +195,16 @@ def test_explicit_tool_segments_give_the_same_model_as_shank_and_flute_keys(refe
     a = solve_modes(build_model(load_assembly(reference_toml)), HOLDER_A, 3).frequency_hz
     b = solve_modes(build_model(load_assembly(path)), HOLDER_A, 3).frequency_hz
     assert np.allclose(a, b, rtol=1e-9)
+
+
+def test_a_model_meshed_for_its_own_frequency_is_the_model(reference_assembly):
+    """build_model's second pass alone, given the frequency its first pass finds, builds
+    the same matrices (what the band's tolerance moves rely on)."""
+    from taptune.model.fe import mesh_frequency_hz
+
+    full = build_model(reference_assembly)
+    again = build_model(reference_assembly, f_max_hz=mesh_frequency_hz(reference_assembly))
+    for name in ("K_tool", "K_holder", "M_tool", "M_holder", "T0", "T1", "R0", "R1"):
+        assert (getattr(full, name) != getattr(again, name)).nnz == 0, name
+    np.testing.assert_array_equal(full.z_tool, again.z_tool)
+    assert mesh_frequency_hz(reference_assembly, ModelOptions(elements_per_wavelength=0)) is None
