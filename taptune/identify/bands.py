@@ -12,7 +12,8 @@ per mode, in Hz::
   :class:`taptune.io.assembly.Tolerances`) propagated through the model's finite-difference
   sensitivities at the best parameters. A stick-out is read off a ruler afresh for every
   setup, so its error at the prediction counts in full, and so does the error at each
-  identification (averaged over several). Holder diameters and the flute ratio are the
+  identification (averaged over several), to the tolerance stated then (kept in the
+  library's records). Holder diameters and the flute ratio are the
   same wrong numbers at the identification and at the prediction: the identified
   parameters absorb most of their effect, so only the *change* of relative sensitivity
   between the identified and the predicted assembly counts.
@@ -298,7 +299,10 @@ def geometry_term(assembly, params, identified, tolerances: Tolerances, model_op
     if "stickout" in pred:
         parts["stickout"] = np.abs(pred["stickout"]) * f
     if identified:
-        ids = [relative_sensitivities(a, params, tolerances, model_options, f.size) for a in identified]
+        # Each stick-out was read when its recording was made, to the tolerance its file
+        # stated then; the holder's diameters and the flute ratio are the ones stated now.
+        ids = [relative_sensitivities(a, params, replace(tolerances, stickout=a.tolerances.stickout), model_options,
+                                      f.size) for a in identified]
         so = [s["stickout"] for s in ids if "stickout" in s]
         if so:
             # Independent ruler errors, one per recording: their mean error enters.

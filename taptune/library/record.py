@@ -9,7 +9,8 @@ from taptune.library.store import HolderLibrary, default_library_path
 def entry_from_identification(result, recordings, assemblies, model_options=None) -> HolderEntry:
     """A library entry for the holder of ``assemblies`` with the identified parameters.
 
-    One provenance record per recording (file name and hash, tool, stick-out, objective).
+    One provenance record per recording (file name and hash, tool, stick-out and its
+    stated tolerance, objective).
     """
     from taptune.model import ModelOptions
 
@@ -27,6 +28,7 @@ def entry_from_identification(result, recordings, assemblies, model_options=None
                 # Position = mode number; None where a mode was not measured.
                 bending_measured_hz=list(measured),
                 bending_model_hz=list(model),
+                stickout_tolerance_mm=asm.tolerances.stickout * 1e3,
             )
         )
     return HolderEntry.create(

@@ -2,7 +2,7 @@
 
 A library file is one JSON document::
 
-    {"schema": "taptune-holder-library", "version": 1 (2 when any holder has "checks"),
+    {"schema": "taptune-holder-library", "version": 1, 2 or 3 (see VERSION),
      "holders": {NAME: ENTRY, ...}}
 
 with ``ENTRY`` as written by :meth:`HolderEntry.to_dict` (lengths in mm, moduli in GPa,
@@ -21,7 +21,8 @@ holder parameters in library units, see :mod:`taptune.model.params`)::
                           "stickout_mm", "date": "2026-11-22T12:38:49Z", "objective",
                           "seed": int | null, "evaluations",
                           "bending_measured_hz": [f1, null, f3], "bending_model_hz": [...],
-                          "taptune_version"}, ...],
+                          "taptune_version",
+                          optional "stickout_tolerance_mm"}, ...],  # as the assembly file stated it
      "checks": [{"date", "recording", "sha256", "tool": "<tool name>", "stickout_mm",  # optional
                  "verdict": "consistent" | "differs" | "inconclusive",
                  "modes": [{"mode", "measured_hz" | null, "predicted_hz", "band_hz"}, ...],
@@ -31,8 +32,9 @@ Every read is
 validated here by hand-written checks on plain JSON data: nothing is ever executed,
 imported or unpickled, and every message names the file, the holder and the key.
 Unknown keys are rejected rather than ignored, so a typo or a foreign document cannot
-pass as a library; a newer format gets a new ``version``: 1 without ``checks``, 2 with
-them (:data:`VERSION`), so a taptune from before checks refuses such a file clearly.
+pass as a library; a newer format gets a new ``version`` (:data:`VERSION`), and a file is
+written with the oldest version that holds what it has, so an older taptune refuses only
+the files it could not read, and clearly.
 """
 
 from __future__ import annotations
@@ -63,13 +65,16 @@ from taptune.io.assembly import (
 from taptune.model.params import NAMES, HolderParams
 
 SCHEMA = "taptune-holder-library"
-#: The newest format this build reads and writes. Version 2 added the ``checks`` history;
-#: a library without checks is still written as version 1, so older taptunes keep reading
-#: it, while one with checks is version 2, which they refuse with "written by a newer
-#: taptune" instead of tripping over an unknown key.
-VERSION = 2
+#: The newest format this build reads and writes. Version 2 added the ``checks`` history,
+#: version 3 the stick-out tolerance stated at each identification. A library is written
+#: with the oldest version that holds what it has (1 without either), so older taptunes
+#: keep reading it, and refuse a file they cannot read with "written by a newer taptune"
+#: instead of tripping over an unknown key.
+VERSION = 3
 #: The format of a library without ``checks`` (what every taptune before checks reads).
 VERSION_WITHOUT_CHECKS = 1
+#: The format of a library with checks but no stated tolerances.
+VERSION_WITH_CHECKS = 2
 
 # Units of the holder parameters in tables and CSV headers (ASCII so spreadsheets agree).
 PARAM_UNITS = {
@@ -394,6 +399,10 @@ class ProvenanceRecord:
         None where that mode was not measured.
     taptune_version : str
         Version of taptune that ran the identification.
+    stickout_tolerance_mm : float or None
+        ± stick-out [mm] the assembly file stated (``stickout_tolerance``; None in records
+        from before it was kept: the default, a ruler's). A later prediction's band takes
+        the stick-out error of this identification from it.
     """
 
     recording: str
@@ -407,6 +416,7 @@ class ProvenanceRecord:
     bending_measured_hz: tuple[float | None, ...]
     bending_model_hz: tuple[float | None, ...]
     taptune_version: str
+    stickout_tolerance_mm: float | None = None
 
     def __post_init__(self):
         # Lists from callers become tuples so records compare and hash like values.
@@ -430,6 +440,7 @@ class ProvenanceRecord:
         bending_measured_hz,
         bending_model_hz,
         date: str | None = None,
+        stickout_tolerance_mm: float | None = None,
     ) -> "ProvenanceRecord":
         """A record for the recording at ``path`` (name and SHA-256 taken from the file)."""
         from taptune import __version__
@@ -446,9 +457,11 @@ class ProvenanceRecord:
             bending_measured_hz=tuple(bending_measured_hz),
             bending_model_hz=tuple(bending_model_hz),
             taptune_version=__version__,
+            stickout_tolerance_mm=None if stickout_tolerance_mm is None else float(stickout_tolerance_mm),
         )
 
     def to_dict(self) -> dict:
+        stated = {} if self.stickout_tolerance_mm is None else {"stickout_tolerance_mm": self.stickout_tolerance_mm}
         return {
             "recording": self.recording,
             "sha256": self.sha256,
@@ -461,12 +474,14 @@ class ProvenanceRecord:
             "bending_measured_hz": list(self.bending_measured_hz),
             "bending_model_hz": list(self.bending_model_hz),
             "taptune_version": self.taptune_version,
-        }
+        } | stated
 
     @classmethod
     def from_dict(cls, data, source: str = "<library>", key: str = "identification") -> "ProvenanceRecord":
         """Validated record from JSON data; errors name ``source`` and ``key``."""
-        d = _object(data, source, key, tuple(f for f in cls.__dataclass_fields__))
+        optional = ("stickout_tolerance_mm",)
+        d = _object(data, source, key, tuple(f for f in cls.__dataclass_fields__ if f not in optional), optional)
+        tolerance = d.get("stickout_tolerance_mm")
         sha = _sha256(d["sha256"], source, f"{key}.sha256")
         seed = d["seed"]
         return cls(
@@ -481,6 +496,8 @@ class ProvenanceRecord:
             bending_measured_hz=_frequencies(d["bending_measured_hz"], source, f"{key}.bending_measured_hz"),
             bending_model_hz=_frequencies(d["bending_model_hz"], source, f"{key}.bending_model_hz"),
             taptune_version=_text(d["taptune_version"], source, f"{key}.taptune_version", 64),
+            stickout_tolerance_mm=None if tolerance is None else _number(
+                tolerance, source, f"{key}.stickout_tolerance_mm", 0.0, lo_open=False),
         )
 
 
@@ -698,14 +715,17 @@ class HolderEntry:
 
     def identified_assemblies(self) -> list[Assembly]:
         """The assemblies of this holder's identifications (the band's Δ stick-out and
-        the identification side of its geometry part); records that no longer form a
-        valid assembly are left out."""
+        the identification side of its geometry part), with the stick-out tolerance each
+        identification stated; records that no longer form a valid assembly are left out."""
         out = []
         for r in self.identifications:
             try:
-                out.append(self.assembly(r.tool, r.stickout_mm))
+                assembly = self.assembly(r.tool, r.stickout_mm)
             except InputError:
                 continue
+            if r.stickout_tolerance_mm is not None:
+                assembly = replace(assembly, tolerances=replace(assembly.tolerances, stickout=r.stickout_tolerance_mm * MM))
+            out.append(assembly)
         return out
 
     def predict(self, assembly):
@@ -862,10 +882,12 @@ def parse_library(data, source: str) -> dict[str, HolderEntry]:
 
 def library_document(entries: dict[str, HolderEntry]) -> dict:
     """The JSON document of a library (holders sorted by name, for stable diffs)."""
+    stated = any(r.stickout_tolerance_mm is not None for entry in entries.values() for r in entry.identifications)
     with_checks = any(entry.checks for entry in entries.values())
+    version = VERSION if stated else VERSION_WITH_CHECKS if with_checks else VERSION_WITHOUT_CHECKS
     return {
         "schema": SCHEMA,
-        "version": VERSION if with_checks else VERSION_WITHOUT_CHECKS,
+        "version": version,
         "holders": {name: entries[name].to_dict() for name in sorted(entries)},
     }
 

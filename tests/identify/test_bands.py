@@ -177,3 +177,34 @@ def test_a_jointly_identified_holder_takes_the_joint_coefficients_never_narrower
     # Δ = 10 mm from the nearer tap: c × f × (1 + 10/Δref).
     assert np.allclose(joint.band.model_form_hz, c * np.array(joint.bending_hz) * (1 + 10.0 / DELTA_REF_MM))
     assert one.band.delta_stickout_mm == pytest.approx(20.0)
+
+
+def test_each_identification_counts_the_stickout_tolerance_it_stated(reference_assembly):
+    """Tapped with the stick-out read off a ruler, predicted with a gauge-measured file: the
+    identification's reading error stays a ruler's (the band must not narrow with the
+    new file), while the prediction's own stick-out part is the gauge's."""
+    from taptune.library.schema import HolderEntry, ProvenanceRecord, tool_to_dict
+
+    gauge, ruler = Tolerances(stickout=0.05e-3), Tolerances(stickout=0.3e-3)
+    target = replace(reference_assembly.with_stickout(0.0735), tolerances=gauge)
+    by_ruler = predict(SETS[:1], target, identified=[replace(reference_assembly, tolerances=ruler)])
+    by_gauge = predict(SETS[:1], target, identified=[replace(reference_assembly, tolerances=gauge)])
+    ruler_part = np.array(by_ruler.band.geometry_parts_hz["stickout_identified"])
+    gauge_part = np.array(by_gauge.band.geometry_parts_hz["stickout_identified"])
+    # Central differences over ±0.3 mm and ±0.05 mm: six times the change, to within curvature.
+    np.testing.assert_allclose(ruler_part, 6 * gauge_part, rtol=0.02)
+    assert by_ruler.band.geometry_parts_hz["stickout"] == by_gauge.band.geometry_parts_hz["stickout"]
+    assert np.all(np.array(by_ruler.bending_hz_spread) > by_gauge.bending_hz_spread)
+    # The library keeps the tolerance of each identification and its predictions use it.
+    record = ProvenanceRecord(recording="tap.wav", sha256="0" * 64, tool=tool_to_dict(reference_assembly.tool),
+                              stickout_mm=53.5, date="2026-11-25T20:00:00Z", objective=0.1, seed=0, evaluations=1,
+                              bending_measured_hz=(4686.0, None, None), bending_model_hz=(4686.0, None, None),
+                              taptune_version="0.1.0", stickout_tolerance_mm=0.3)
+    entry = HolderEntry.create(reference_assembly.holder, SETS[0], identifications=[record])
+    (identified,) = entry.identified_assemblies()
+    assert identified.tolerances.stickout == pytest.approx(0.3e-3)
+    assert entry.predict(target).band.geometry_parts_hz["stickout_identified"] == pytest.approx(
+        by_ruler.band.geometry_parts_hz["stickout_identified"], rel=1e-9)
+    unstated = HolderEntry.create(reference_assembly.holder, SETS[0],
+                                  identifications=[replace(record, stickout_tolerance_mm=None)])
+    assert unstated.identified_assemblies()[0].tolerances == Tolerances()  # a ruler's, by default

@@ -49,6 +49,14 @@ def test_entry_rebuilds_the_identified_assembly():
     assert entry.holder_geometry() == REFERENCE.holder
 
 
+def test_the_stated_stickout_tolerance_round_trips_and_is_optional():
+    stated = ProvenanceRecord(**{**make_record().__dict__, "stickout_tolerance_mm": 0.05})
+    assert ProvenanceRecord.from_dict(json.loads(json.dumps(stated.to_dict())), "<test>") == stated
+    older = make_record()
+    assert "stickout_tolerance_mm" not in older.to_dict()
+    assert ProvenanceRecord.from_dict(older.to_dict(), "<test>").stickout_tolerance_mm is None
+
+
 def test_a_mode_not_measured_keeps_its_place():
     record = ProvenanceRecord(**{**make_record().__dict__, "bending_measured_hz": [3050.0, None, 12990.25]})
     again = ProvenanceRecord.from_dict(json.loads(json.dumps(record.to_dict())), "<test>")
@@ -116,6 +124,10 @@ def mutate(path: tuple, value):
         (mutate(("identifications", 0, "tool", "segments"), []), "identifications[0].tool.segments", "non-empty"),
         (mutate(("identifications", 0, "bending_measured_hz"), "3 kHz"), "bending_measured_hz", "list of frequencies"),
         (mutate(("identifications", 0, "bending_model_hz"), [3000.0, -1.0]), "bending_model_hz[1]", "> 0"),
+        (mutate(("identifications", 0, "stickout_tolerance_mm"), -0.3), "identifications[0].stickout_tolerance_mm",
+         ">= 0"),
+        (mutate(("identifications", 0, "stickout_tolerance_mm"), "0.3 mm"), "identifications[0].stickout_tolerance_mm",
+         "finite number"),
         (mutate(("model_options",), [1, 2]), "model_options", "JSON object"),
         (mutate(("__class__",), "os.system"), "__class__", "not a known key"),
         (mutate(("name",), "other"), "name", "differs from its key"),
@@ -142,7 +154,7 @@ def test_validation_names_file_holder_and_key(tmp_path, change, key, problem):
 @pytest.mark.parametrize(
     "text, problem",
     [
-        ('{"schema": "taptune-holder-library", "version": 3, "holders": {}}', "newer taptune"),
+        ('{"schema": "taptune-holder-library", "version": 4, "holders": {}}', "newer taptune"),
         ('{"schema": "taptune-holder-library", "version": "1", "holders": {}}', "version must be a positive integer"),
         ('{"schema": "taptune-holder-library", "version": 1, "holders": []}', "holders must be a JSON object"),
         ('{"schema": "taptune-holder-library", "version": 1, "holders": {}, "x": 1}', "x is not a known key"),

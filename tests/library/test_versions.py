@@ -1,5 +1,6 @@
-"""Library format versions: 1 without checks (older taptunes read it), 2 with checks (they refuse
-it clearly), and a newer version than this build knows is one line and never overwritten."""
+"""Library format versions: 1 without checks (older taptunes read it), 2 with checks, 3 with stated
+stick-out tolerances (older taptunes refuse them clearly), and a newer version than this build
+knows is one line and never overwritten."""
 
 import json
 from dataclasses import replace
@@ -17,12 +18,20 @@ def _version(path) -> int:
     return json.loads(path.read_text())["version"]
 
 
-def test_a_library_without_checks_stays_version_1_and_with_checks_becomes_2(lib):
+def test_a_library_is_written_with_the_oldest_version_that_holds_it(lib):
     lib.put(make_entry("A"))
     assert _version(lib.path) == 1  # what every taptune before `check` reads
     lib.put(replace(make_entry("B"), checks=(make_check(),)))
-    assert _version(lib.path) == VERSION == 2
+    assert _version(lib.path) == 2  # what every taptune before stated tolerances reads
     assert lib.get("B").checks == (make_check(),)
+    entry = make_entry("C")
+    stated = replace(entry.identifications[0], stickout_tolerance_mm=0.05)
+    lib.put(replace(entry, identifications=(stated,)))
+    assert _version(lib.path) == VERSION == 3
+    assert lib.get("C").identifications[0].stickout_tolerance_mm == 0.05
+    assert lib.get("A").identifications[0].stickout_tolerance_mm is None
+    lib.remove("C")
+    assert _version(lib.path) == 2
 
 
 def test_a_reader_of_version_1_refuses_a_library_with_checks_by_its_version():
