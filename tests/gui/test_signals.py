@@ -1,14 +1,23 @@
-"""Emitting many signals must not wear out ``True`` (PySide6 6.12 takes a reference per emit)."""
+"""PySide6 6.12 must not wear out ``True`` or ``None``: it takes a reference to ``True`` per
+emit and disconnect, and to ``None`` per Qt call that returns ``None``."""
 
 import sys
 
 from PySide6.QtCore import QObject, Signal
+from PySide6.QtWidgets import QWidget
 
+from taptune.gui import signals
 from taptune.gui.signals import emit
 
 
 class _Source(QObject):
     progress = Signal(float, str)
+
+
+def _references(obj) -> int:
+    """References the program holds to ``obj`` (without the ones the repair added)."""
+    count = sys.getrefcount(obj)
+    return count - signals.IMMORTAL if count > signals.IMMORTAL // 2 else count
 
 
 def test_ten_thousand_emits_leave_the_refcount_of_true_alone(qtbot):
@@ -21,3 +30,32 @@ def test_ten_thousand_emits_leave_the_refcount_of_true_alone(qtbot):
     # Without the compensation this drops by 10 000 (and the interpreter aborts near 0).
     assert abs(sys.getrefcount(True) - before) < 100
     assert len(received) == 10000
+
+
+def test_more_void_qt_calls_than_references_to_none_do_not_abort(qtbot):
+    # Each setEnabled() costs None a reference: without the repair the interpreter aborts
+    # ("Fatal Python error: none_dealloc") before the loop ends — a canvas redraw makes 4-5
+    # such calls, so a long session of slider drags got there too.
+    widget = QWidget()
+    qtbot.addWidget(widget)
+    calls = _references(None) + 10000
+    for _ in range(calls):
+        widget.setEnabled(True)
+    assert widget.isEnabled()
+    assert sys.getrefcount(None) > signals.IMMORTAL // 2
+
+
+def test_more_disconnects_than_references_to_true_do_not_abort(qtbot):
+    # Each disconnect() returns True without a reference ("bool_dealloc" without the repair).
+    source = _Source()
+    received = []
+
+    def slot(fraction, message):
+        received.append(fraction)
+
+    for _ in range(_references(True) + 1000):
+        source.progress.connect(slot)
+        source.progress.disconnect(slot)
+    emit(source.progress, 0.5, "done")
+    assert received == []
+    assert sys.getrefcount(True) > signals.IMMORTAL // 2
