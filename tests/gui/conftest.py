@@ -7,6 +7,8 @@ tap, on a low noise floor, as a microphone would hear a tool-tip tap.
 
 from __future__ import annotations
 
+import gc
+
 import numpy as np
 import pytest
 
@@ -124,3 +126,19 @@ def window(qtbot, library_path, fast_identify_options, settings):
     win.show()
     yield win
     win.close()
+    delete_now(win)
+
+
+def delete_now(widget) -> None:
+    """Delete a closed window now, on the GUI thread, and collect the garbage it leaves.
+
+    Otherwise pytest-qt's ``deleteLater`` is carried out by the next test's event loop
+    (while that test's worker thread runs), and Qt objects that only Python cycles hold
+    (settings, event loops, timers) are deleted by whichever thread next collects
+    garbage — the analysis worker threads do.
+    """
+    from PySide6.QtCore import QCoreApplication, QEvent
+
+    widget.deleteLater()
+    QCoreApplication.sendPostedEvents(None, QEvent.DeferredDelete)
+    gc.collect()
