@@ -1,5 +1,6 @@
-"""PySide6 6.12 must not wear out ``True`` or ``None``: it takes a reference to ``True`` per
-emit and disconnect, and to ``None`` per Qt call that returns ``None``."""
+"""PySide6 must not wear out ``True`` or ``None``: 6.12.0 takes a reference to ``True`` per emit
+and disconnect, and to ``None`` per Qt call that returns ``None``. With a sound PySide6 (the
+one taptune asks for) these run through unrepaired; with 6.12.0 only the repair saves them."""
 
 import sys
 
@@ -38,11 +39,12 @@ def test_more_void_qt_calls_than_references_to_none_do_not_abort(qtbot):
     # such calls, so a long session of slider drags got there too.
     widget = QWidget()
     qtbot.addWidget(widget)
+    before = sys.getrefcount(None)
     calls = _references(None) + 10000
     for _ in range(calls):
         widget.setEnabled(True)
     assert widget.isEnabled()
-    assert sys.getrefcount(None) > signals.IMMORTAL // 2
+    _sound_or_repaired(None, before)
 
 
 def test_more_disconnects_than_references_to_true_do_not_abort(qtbot):
@@ -53,9 +55,16 @@ def test_more_disconnects_than_references_to_true_do_not_abort(qtbot):
     def slot(fraction, message):
         received.append(fraction)
 
+    before = sys.getrefcount(True)
     for _ in range(_references(True) + 1000):
         source.progress.connect(slot)
         source.progress.disconnect(slot)
     emit(source.progress, 0.5, "done")
     assert received == []
-    assert sys.getrefcount(True) > signals.IMMORTAL // 2
+    _sound_or_repaired(True, before)
+
+
+def _sound_or_repaired(obj, before: int) -> None:
+    """The binding kept its references to ``obj`` (6.11), or the repair made it immortal (6.12.0)."""
+    after = sys.getrefcount(obj)
+    assert after > signals.IMMORTAL // 2 or abs(after - before) < 100, (before, after)
