@@ -11,11 +11,18 @@ set's spread). The load average is printed with the wall times: the machine may 
 With ``--app`` it times instead, in the offscreen app, the click on Identify to the fitted
 view: with one process, then with the app's warm process pool.
 
+With ``--cli`` it times ``taptune identify`` as the user runs it, one process per tap
+(imports, analysis, fit, outlook, library and JSON writes): first with no reduced model in
+the disk cache (a new assembly), then again (the assembly tapped before).
+
+The in-process figures are measured cold: the disk cache is off, each repeat builds its
+evaluator, as for an assembly never tapped before.
+
 With ``--split`` the analysis (model-guided labels, which build the reduced evaluator),
 the fit (search, near-optimal set, full-model check) and the transfer outlook the JSON
 record adds after it (a prediction 20 mm further out with its band) are timed apart.
 
-Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile] [--app] [--split]``.
+Run: ``python benchmarks/bench_identify.py [--jobs N] [--seed N] [--repeat N] [--profile] [--app] [--cli] [--split]``.
 """
 
 from __future__ import annotations
@@ -30,6 +37,7 @@ import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ["TAPTUNE_CACHE_DIR"] = "off"  # cold: every identification builds its evaluator (--cli sets its own)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
@@ -110,6 +118,31 @@ def app_figures(n_cases: int | None = None, jobs_list=(1, None)) -> None:
     del app
 
 
+def cli_figures(n_cases: int | None = None, repeat: int = 1) -> None:
+    """Wall time of ``taptune identify`` (a fresh process per tap), cold then warm disk cache."""
+    import subprocess
+    import tempfile
+
+    print(f"load average at start: {os.getloadavg()[0]:.2f} (cores: {os.cpu_count()})")
+    cold, warm = [], []
+    with tempfile.TemporaryDirectory(prefix="bench-cli-") as tmp:
+        for name, wav, toml, _ in itertools.islice(cases(), n_cases):
+            row = []
+            for r in range(repeat):
+                env = dict(os.environ, OPENBLAS_NUM_THREADS="1", TAPTUNE_CACHE_DIR=str(Path(tmp) / f"cache-{len(cold)}"))
+                argv = [sys.executable, "-m", "taptune", "identify", str(wav), "--assembly", str(toml),
+                        "--library", str(Path(tmp) / "holders.json"), "--json", str(Path(tmp) / "out.json")]
+                for times in (cold, warm):  # the first run fills the empty cache folder
+                    t0 = time.perf_counter()
+                    subprocess.run(argv, env=env, check=True, stdout=subprocess.DEVNULL)
+                    times.append(time.perf_counter() - t0)
+                    row.append(times[-1])
+            print(f"taptune identify {name:16s} cold {' '.join(f'{t:.2f}' for t in row[::2])} s, "
+                  f"warm {' '.join(f'{t:.2f}' for t in row[1::2])} s (load {os.getloadavg()[0]:.1f})", flush=True)
+    print(f"\ntaptune identify wall time over {len(cold)} runs: cold (new assembly) median {np.median(cold):.2f} s, "
+          f"max {max(cold):.2f} s; warm (assembly tapped before) median {np.median(warm):.2f} s, max {max(warm):.2f} s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=None)
@@ -117,12 +150,16 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--profile", action="store_true", help="cProfile the identifications (use with --jobs 1)")
     ap.add_argument("--app", action="store_true", help="time click-to-fitted-view in the offscreen app instead")
+    ap.add_argument("--cli", action="store_true", help="time taptune identify, one process per tap, instead")
     ap.add_argument("--cases", type=int, default=None, help="only the first N cases")
     ap.add_argument("--split", action="store_true",
                     help="time the analysis (labels, evaluator build) and the fit apart")
     args = ap.parse_args()
     if args.app:
         app_figures(args.cases)
+        return
+    if args.cli:
+        cli_figures(args.cases, args.repeat)
         return
     profiler = None
     if args.profile:
