@@ -103,16 +103,10 @@ def run_check(recording, assembly, entry, library_path, progress=None):
 
 
 def run_identification(analyses, assemblies, options, progress=None):
-    """Joint identification of one or several recordings (worker thread); ``progress`` may cancel it.
-
-    Returns ``(identification, advice)``: after a single recording, ``advice`` is
-    :func:`~taptune.gui.advice.second_tap_advice` (None when the bands are narrow).
-    """
+    """Joint identification of one or several recordings (worker thread); ``progress`` may cancel it."""
     from taptune.identify import identify
 
-    result = identify(list(analyses), list(assemblies), options, progress=progress)
-    advice = second_tap_advice(result, assemblies[0]) if len(analyses) == 1 else None
-    return result, advice
+    return identify(list(analyses), list(assemblies), options, progress=progress)
 
 
 class MainWindow(QMainWindow):
@@ -134,6 +128,7 @@ class MainWindow(QMainWindow):
     analysis_ready = Signal(object)
     identification_ready = Signal(object)
     identification_ended = Signal(str)  # "finished", "failed" or "cancelled"
+    advice_ready = Signal(str)  # the second-tap advice after one recording ("" when none)
     saved_to_library = Signal(str)
     check_ended = Signal(object)  # the HolderCheck, or None when it failed
     load_failed = Signal(str)
@@ -596,8 +591,7 @@ class MainWindow(QMainWindow):
             self.progress.setValue(int(round(1000 * max(0.0, min(1.0, fraction)))))
         self.progress.setFormat(message)
 
-    def _identified(self, outcome, recordings, assemblies) -> None:
-        result, advice = outcome
+    def _identified(self, result, recordings, assemblies) -> None:
         assembly = assemblies[0]
         self._identify_task = None
         self.identification = result
@@ -605,8 +599,6 @@ class MainWindow(QMainWindow):
         self._set_progress(1.0, "done")
         names = [f"{Path(r.path).name} ({a.stickout * 1e3:g} mm)" for r, a in zip(recordings, assemblies)]
         self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model", names)
-        if advice:
-            self.banner.show_text(advice)
         self.set_holder_source(PredictorSource(f"identified now ({assembly.holder.name})",
                                                tuple(result.param_sets), assembly, self.identify_options.model,
                                                result.relative_floor, tuple(assemblies),
@@ -617,6 +609,25 @@ class MainWindow(QMainWindow):
         self._update_actions()
         emit(self.identification_ready, result)
         emit(self.identification_ended, "finished")
+        if len(assemblies) == 1:
+            self._advise(result, assembly)
+
+    def _advise(self, result, assembly) -> None:
+        """Ask for a second tap when one recording leaves the bands wide. Its prediction
+        (the band 20 mm further out, 0.2 s) runs after the fitted view is up; the banner
+        shows only if no newer identification has replaced this one meanwhile."""
+
+        def show(text) -> None:
+            if text and self.identification is result:
+                self.banner.show_text(text)
+            emit(self.advice_ready, text or "")
+
+        def failed(message: str) -> None:
+            self.statusBar().showMessage(f"No second-tap advice: {message}", 8000)
+            emit(self.advice_ready, "")
+
+        self.runner.start(second_tap_advice, result, assembly, on_finished=show, on_failed=failed,
+                          with_progress=False)
 
     def _identification_failed(self, message: str) -> None:
         self._identify_task = None

@@ -54,6 +54,14 @@ def test_open_identify_save_and_predict(qtbot, window, generated_recording, libr
     assert window.tabs.currentWidget() is window.fit
     assert window.fit.freq_table.item(0, 1).text() == f"{bending[0]:,.1f}"
     assert abs(result.bending_model_hz[0][0] / bending[0] - 1) < 0.02
+    # The second-tap advice comes after the fitted view, from the CLI's rule.
+    from taptune.gui.advice import second_tap_advice
+
+    with qtbot.waitSignal(window.advice_ready, timeout=30000) as advised:
+        pass
+    expected = second_tap_advice(result, window.assembly_panel.assembly)
+    assert advised.args == [expected or ""]
+    assert window.banner.isVisible() == bool(expected)
 
     # A library that cannot be written: a message, and the identification is kept.
     blocker_file = library_path.parent / "not-a-folder"

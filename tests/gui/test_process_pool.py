@@ -46,7 +46,7 @@ def test_pool_identification_ticks_and_matches_one_process(qtbot, library_path, 
     # The event loop ran all along (10 % of the ideal tick count: the machine may be loaded).
     assert len(ticks) >= max(3, 0.1 * seconds / 0.010), f"{len(ticks)} ticks in {seconds:.2f} s"
     assert np.diff([t0] + ticks).max() < max(1.0, 0.5 * seconds)
-    alone, _advice = run_identification([win.analysis], [win.assembly_panel.assembly], replace(options, jobs=1), None)
+    alone = run_identification([win.analysis], [win.assembly_panel.assembly], replace(options, jobs=1), None)
     pooled, single = win.identification.to_dict(), alone.to_dict()
     pooled.pop("seconds"), single.pop("seconds")
     assert pooled == single

@@ -46,6 +46,7 @@ def test_second_recording_is_identified_jointly_and_saved(qtbot, window, generat
     assert window.fit.freq_table.item(3, 0).text() == "f1 · 2"
     assert window.fit.freq_table.item(3, 1).text() == f"{result.bending_measured_hz[1][0]:,.1f}"
     assert "Joint fit of" in window.fit.summary.text()
+    assert not window.banner.isVisible()  # two stick-outs: no second-tap advice
     # Both stick-outs go to the library's provenance.
     name = window.save_to_library()
     stickouts = sorted(r.stickout_mm for r in window.library_view.entries[name].identifications)
