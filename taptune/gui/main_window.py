@@ -610,7 +610,9 @@ class MainWindow(QMainWindow):
         emit(self.identification_ready, result)
         emit(self.identification_ended, "finished")
         if len(assemblies) == 1:
-            self._advise(result, assembly)
+            # After the fitted view has painted (queued before this timer): the advice's
+            # thread would otherwise share the interpreter with the drawing.
+            QTimer.singleShot(0, self, lambda: self._advise(result, assembly))
 
     def _advise(self, result, assembly) -> None:
         """Ask for a second tap when one recording leaves the bands wide. Its prediction
