@@ -24,8 +24,8 @@ import sys
 from PySide6.QtCore import QObject, Signal
 
 # Extra references given to None, True and False: 2**40, more than any session can lose
-# (a billion Qt calls a second would take 18 minutes).
-IMMORTAL = 1 << 40
+# (a billion Qt calls a second would take 18 minutes); 2**29 where Py_ssize_t is 32 bits.
+IMMORTAL = 1 << (40 if sys.maxsize > 2**32 else 29)
 
 
 class _Probe(QObject):
@@ -86,7 +86,9 @@ def _make_immortal() -> None:
 
 
 _STEALS = _emit_steals_a_reference()
-if sys.implementation.name == "cpython" and sys.version_info < (3, 12) and _singletons_lose_references():
+# ob_refcnt is the first field only in a build without trace-refs (sys.getobjects).
+if (sys.implementation.name == "cpython" and sys.version_info < (3, 12) and not hasattr(sys, "getobjects")
+        and _singletons_lose_references()):
     _make_immortal()
 
 

@@ -172,15 +172,18 @@ def quick_fit(evaluator, measured: dict[int, float], sigma=0.01) -> tuple[float,
     diff_step = 1e-3
 
     def jacobian(x):
-        # least_squares' own forward differences (relative step, turned back inside the
-        # bounds), with the moved candidates solved in one batch: 40 % of the fit's time.
+        # least_squares' own '2-point' differences (scipy.optimize._numdiff: the relative
+        # step, √eps·max(1, |x|) where it vanishes, turned back where it leaves the bounds),
+        # with the moved candidates solved in one batch instead of one by one.
         r0 = seen.get(x.tobytes())
         if r0 is None:
             r0 = residuals(x)
-        h = diff_step * np.where(x >= 0, 1.0, -1.0) * np.maximum(1.0, np.abs(x))
-        h = np.where((x + h > hi) & (x - h >= lo), -h, h)
-        h = (x + h) - x
+        sign = np.where(x >= 0, 1.0, -1.0)
+        h = diff_step * sign * np.abs(x)
+        h = np.where((x + h) - x == 0, np.sqrt(np.finfo(float).eps) * sign * np.maximum(1.0, np.abs(x)), h)
+        h = np.where(((x + h < lo) | (x + h > hi)) & (np.abs(h) <= np.maximum(x - lo, hi - x)), -h, h)
         X = x + np.diag(h)
+        h = np.diag(X) - x
         batch = evaluator.evaluate_many(np.array([p_of(row) for row in X]), window).bending_hz
         return ((residuals_of(batch, X) - r0) / h[:, None]).T
 

@@ -506,11 +506,15 @@ def _unknown_keys(r: "_Reader", data: dict) -> tuple[str, ...]:
     return tuple(out)
 
 
+#: The largest stick-out tolerance a file may state [mm] (beyond it, a typo).
+MAX_STICKOUT_TOLERANCE_MM = 20.0
+
+
 def _tolerances(r: "_Reader", h: dict, t: dict, s: dict) -> Tolerances:
     """The optional geometry tolerances, validated (a negative or absurd one is a typo)."""
     d = Tolerances()
     checks = (
-        (s, "stickout_tolerance", "[setup]", d.stickout / MM, 20.0, "mm (how far the stick-out may be off; ruler ≈ 0.3–0.5)"),
+        (s, "stickout_tolerance", "[setup]", d.stickout / MM, MAX_STICKOUT_TOLERANCE_MM, "mm (how far the stick-out may be off; ruler ≈ 0.3–0.5)"),
         (h, "diameter_tolerance", "[holder]", 100 * d.diameter, 10.0, "% (how far the holder diameters may be off; calipers ≈ 0.2, catalogue ≈ 1)"),
         (t, "flute_ratio_tolerance", "[tool]", d.flute_ratio, 0.5, "(how far the flute ratio may be off; typical 0.05)"),
     )

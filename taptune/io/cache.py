@@ -60,8 +60,15 @@ def digest(*parts) -> str:
     return h.hexdigest()
 
 
+# An entry's file name: what the cache may prune in a folder it shares with other files.
+_ENTRY = "*-" + "[0-9a-f]" * 40 + ".npz"
+
+
 def _path(kind: str, key: str) -> Path | None:
-    folder = cache_dir()
+    try:
+        folder = cache_dir()
+    except (RuntimeError, OSError):  # no home folder to find: nothing is kept
+        return None
     return None if folder is None else folder / f"{kind}-{key[:40]}.npz"
 
 
@@ -72,16 +79,19 @@ def load_arrays(kind: str, key: str) -> dict[str, np.ndarray] | None:
     or foreign file): the caller rebuilds and saves over it.
     """
     path = _path(kind, key)
-    if path is None or not path.is_file():
+    if path is None:
         return None
-    try:
+    try:  # a missing file, a folder in its place or no permission: OSError
         with np.load(path, allow_pickle=False) as z:
             arrays = {name: z[name] for name in z.files}
-        if str(arrays.pop("_key", "")) != key:
-            return None
-        os.utime(path)  # recently used: pruned last
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
         return None
+    if str(arrays.pop("_key", "")) != key:
+        return None
+    try:
+        os.utime(path)  # recently used: pruned last
+    except OSError:
+        pass  # a read-only cache still serves
     return arrays
 
 
@@ -100,19 +110,22 @@ def save_arrays(kind: str, key: str, arrays: dict[str, np.ndarray]) -> bool:
         with open(tmp, "wb") as f:
             np.savez(f, _key=np.array(key), **arrays)
         os.replace(tmp, path)
-    except OSError:
+    except BaseException as err:  # an interrupted write leaves no temporary file behind either
         try:
             tmp.unlink(missing_ok=True)
         except OSError:
             pass  # no folder, so no temporary file either
-        return False
+        if isinstance(err, OSError):
+            return False
+        raise
     _prune(path.parent)
     return True
 
 
 def _prune(folder: Path) -> None:
     try:
-        entries = sorted(folder.glob("*.npz"), key=lambda p: p.stat().st_mtime, reverse=True)
+        # Only the cache's own entries: the folder may be one the user keeps other files in.
+        entries = sorted(folder.glob(_ENTRY), key=lambda p: p.stat().st_mtime, reverse=True)
         for old in entries[MAX_ENTRIES:]:
             old.unlink(missing_ok=True)
     except OSError:

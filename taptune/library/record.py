@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from taptune.io.assembly import Tolerances
 from taptune.library.schema import HolderEntry, ProvenanceRecord
 from taptune.library.store import HolderLibrary, default_library_path
 
@@ -28,7 +29,10 @@ def entry_from_identification(result, recordings, assemblies, model_options=None
                 # Position = mode number; None where a mode was not measured.
                 bending_measured_hz=list(measured),
                 bending_model_hz=list(model),
-                stickout_tolerance_mm=asm.tolerances.stickout * 1e3,
+                # Only a stated non-default one: a library stays readable by the
+                # taptunes from before it was kept until someone states one.
+                stickout_tolerance_mm=None if asm.tolerances.stickout == Tolerances().stickout
+                else asm.tolerances.stickout * 1e3,
             )
         )
     return HolderEntry.create(

@@ -50,6 +50,7 @@ from pathlib import Path
 from taptune.errors import InputError, LibraryError
 from taptune.io.assembly import (
     GPA,
+    MAX_STICKOUT_TOLERANCE_MM,
     MM,
     Assembly,
     Holder,
@@ -400,9 +401,9 @@ class ProvenanceRecord:
     taptune_version : str
         Version of taptune that ran the identification.
     stickout_tolerance_mm : float or None
-        ± stick-out [mm] the assembly file stated (``stickout_tolerance``; None in records
-        from before it was kept: the default, a ruler's). A later prediction's band takes
-        the stick-out error of this identification from it.
+        ± stick-out [mm] the assembly file stated (``stickout_tolerance``); None for the
+        default, a ruler's (and in records from before it was kept). A later prediction's
+        band takes the stick-out error of this identification from it.
     """
 
     recording: str
@@ -496,9 +497,17 @@ class ProvenanceRecord:
             bending_measured_hz=_frequencies(d["bending_measured_hz"], source, f"{key}.bending_measured_hz"),
             bending_model_hz=_frequencies(d["bending_model_hz"], source, f"{key}.bending_model_hz"),
             taptune_version=_text(d["taptune_version"], source, f"{key}.taptune_version", 64),
-            stickout_tolerance_mm=None if tolerance is None else _number(
-                tolerance, source, f"{key}.stickout_tolerance_mm", 0.0, lo_open=False),
+            stickout_tolerance_mm=None if tolerance is None else _stickout_tolerance(
+                tolerance, source, f"{key}.stickout_tolerance_mm"),
         )
+
+
+def _stickout_tolerance(value, source: str, key: str) -> float:
+    """A stated stick-out tolerance [mm], in the range an assembly file may state."""
+    v = _number(value, source, key, 0.0, lo_open=False)
+    if v > MAX_STICKOUT_TOLERANCE_MM:
+        _fail(source, key, f"must be <= {MAX_STICKOUT_TOLERANCE_MM:g} mm, got {v!r}")
+    return v
 
 
 @dataclass(frozen=True)

@@ -286,16 +286,12 @@ def build_model(assembly: Assembly, options: ModelOptions = ModelOptions(), f_ma
     The first pass never splits elements, so ``mesh_scale = 0.5`` halves exactly the
     elements of the default mesh.
     """
-    if options.elements_per_wavelength > 0 and f_max_hz is not None:
-        return assemble(build_mesh(assembly, options, f_max_hz), options)
+    if options.elements_per_wavelength > 0:
+        f_max = mesh_frequency_hz(assembly, options) if f_max_hz is None else f_max_hz
+        return assemble(build_mesh(assembly, options, f_max), options)
     base = replace(options, mesh_scale=max(1.0, options.mesh_scale))
     fe = assemble(build_mesh(assembly, base), base)
-    if options.elements_per_wavelength > 0:
-        f_max = highest_bending_hz(fe)
-        fe = assemble(build_mesh(assembly, options, f_max), options)
-    elif options != base:
-        fe = assemble(build_mesh(assembly, options), options)
-    return fe
+    return fe if options == base else assemble(build_mesh(assembly, options), options)
 
 
 def mesh_frequency_hz(assembly: Assembly, options: ModelOptions = ModelOptions()) -> float | None:

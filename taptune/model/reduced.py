@@ -754,12 +754,16 @@ def cached_evaluator(assembly: Assembly, options: ModelOptions = ModelOptions())
 
 def _cache_key(fe: FEModel, reduction: ReductionOptions) -> str:
     """Hash of all a reduced model is computed from: the full model, the reduction
-    options, the search space, the shift and this module's code."""
+    options, the search space, the shift, this module's code and the numerical libraries
+    (their random numbers and round-off)."""
     from pathlib import Path
+
+    import scipy
 
     from taptune.io.cache import digest
 
-    parts = [Path(__file__).read_bytes(), reduction, SIGMA, P_LOWER, P_UPPER, ETA_REFERENCE_MM, fe.options,
+    parts = [np.__version__, scipy.__version__, Path(__file__).read_bytes(), reduction, SIGMA, P_LOWER, P_UPPER,
+             ETA_REFERENCE_MM, fe.options,
              fe.rigid_contact, fe.z_holder, fe.z_tool, fe.contact_nodes, fe.tip_dof, *fe.rigid_vectors]
     for name in (*_K_PIECES, "M_tool", "M_holder"):
         m = getattr(fe, name).tocsr()

@@ -17,6 +17,7 @@ def folder(tmp_path, monkeypatch):
 def test_arrays_come_back_exactly(folder):
     arrays = {"a": np.arange(6.0).reshape(2, 3), "b": np.array([1 + 2j, 3 - 4j]), "n": np.array(7)}
     assert cache.save_arrays("kind", "k1", arrays)
+    assert (folder / "kind-k1.npz").is_file()
     back = cache.load_arrays("kind", "k1")
     assert set(back) == set(arrays)
     for name, value in arrays.items():
@@ -58,16 +59,46 @@ def test_the_user_cache_folder_follows_xdg(tmp_path, monkeypatch):
     assert cache.cache_dir() == tmp_path / ".cache" / "taptune"
 
 
-def test_only_the_most_recently_used_entries_are_kept(folder, monkeypatch):
+def test_only_the_most_recently_used_entries_are_kept_and_nothing_else_is_touched(folder, monkeypatch):
     monkeypatch.setattr(cache, "MAX_ENTRIES", 3)
+    folder.mkdir(parents=True)
+    # The user's own files in a folder the cache was pointed at: never pruned.
+    mine = [folder / "measurement_01.npz", folder / "my-data.npz", folder / ("x-" + "0" * 39 + ".npz")]
+    for i, path in enumerate(mine):
+        np.savez(path, a=np.ones(2))
+        os.utime(path, (10 + i, 10 + i))
+    keys = [cache.digest(i) for i in range(4)]
     for i in range(3):
-        cache.save_arrays("kind", f"key{i}", {"a": np.full(2, i)})
-        entry = next(p for p in folder.glob("*.npz") if cache.load_arrays("kind", f"key{i}") is not None)
+        cache.save_arrays("kind", keys[i], {"a": np.full(2, i)})
+        (entry,) = folder.glob(f"kind-{keys[i][:40]}.npz")
         os.utime(entry, (1000 + i, 1000 + i))
-    cache.load_arrays("kind", "key0")  # used again: now the newest
-    cache.save_arrays("kind", "key3", {"a": np.full(2, 3)})
-    kept = {k for k in ("key0", "key1", "key2", "key3") if cache.load_arrays("kind", k) is not None}
-    assert kept == {"key0", "key2", "key3"}
+    cache.load_arrays("kind", keys[0])  # used again: now the newest
+    cache.save_arrays("kind", keys[3], {"a": np.full(2, 3)})
+    kept = {i for i in range(4) if cache.load_arrays("kind", keys[i]) is not None}
+    assert kept == {0, 2, 3}
+    assert all(path.is_file() for path in mine)
+
+
+def test_odd_folders_keep_nothing_and_raise_nothing(tmp_path, monkeypatch):
+    arrays = {"a": np.ones(3)}
+    key = cache.digest("odd")
+    # No home folder to be found (some containers): no cache.
+    monkeypatch.setenv(cache.ENV_VAR, "~nosuchuser-taptune/cache")
+    assert cache.load_arrays("kind", key) is None and not cache.save_arrays("kind", key, arrays)
+    # A folder where the entry's file should be.
+    monkeypatch.setenv(cache.ENV_VAR, str(tmp_path))
+    (tmp_path / f"kind-{key[:40]}.npz").mkdir()
+    assert cache.load_arrays("kind", key) is None and not cache.save_arrays("kind", key, arrays)
+
+
+def test_an_interrupted_write_leaves_no_temporary_file(folder, monkeypatch):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cache.np, "savez", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        cache.save_arrays("kind", cache.digest(1), {"a": np.ones(3)})
+    assert list(folder.iterdir()) == []
 
 
 def test_the_digest_tells_arrays_apart_by_value_dtype_and_shape():

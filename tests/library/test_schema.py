@@ -128,6 +128,8 @@ def mutate(path: tuple, value):
          ">= 0"),
         (mutate(("identifications", 0, "stickout_tolerance_mm"), "0.3 mm"), "identifications[0].stickout_tolerance_mm",
          "finite number"),
+        (mutate(("identifications", 0, "stickout_tolerance_mm"), 300.0), "identifications[0].stickout_tolerance_mm",
+         "<= 20 mm"),
         (mutate(("model_options",), [1, 2]), "model_options", "JSON object"),
         (mutate(("__class__",), "os.system"), "__class__", "not a known key"),
         (mutate(("name",), "other"), "name", "differs from its key"),
