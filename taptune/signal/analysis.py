@@ -370,7 +370,7 @@ def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz
                              min_db=o.faint_min_db, tap_db=o.faint_tap_db, f_ratio=o.faint_f_ratio,
                              prominence_db=o.faint_prominence_db, tap_fraction=o.faint_tap_fraction,
                              ring_hz=o.faint_ring_hz, stationary_margin_db=o.stationary_margin_db,
-                             oversample=r["oversample"])
+                             oversample=r["oversample"], known_bins=r["idx"])
     scatter = tap_scatter(freq, r["tap_mag"], [c["idx"] for c in cands])
     out = []
     for c, sc in zip(cands, scatter):

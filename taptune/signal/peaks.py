@@ -687,15 +687,26 @@ def tap_scatter(freq_hz, tap_mag, idx) -> np.ndarray:
     return out
 
 
-def _flank_floor_db(db, i: int, inner: int, outer: int) -> float:
+def _flank_floor_db(db, i: int, inner: int, outer: int, side: str = "both") -> float:
     """Robust local floor [dB] at bin ``i``: the mean of the medians of the two flanks
     ``[i − outer, i − inner)`` and ``(i + inner, i + outer]`` (a straight line in dB
     through them, so a peak on the sloping skirt of a louder mode is judged against
-    the skirt, not the far noise)."""
-    left = db[max(i - outer, 0):max(i - inner, 0)]
-    right = db[i + inner + 1:i + outer + 1]
-    meds = [float(np.median(side)) for side in (left, right) if side.size >= 3]
+    the skirt, not the far noise); ``side`` "left" or "right" takes that flank alone."""
+    left = db[max(i - outer, 0):max(i - inner, 0)] if side != "right" else db[:0]
+    right = db[i + inner + 1:i + outer + 1] if side != "left" else db[:0]
+    meds = [float(np.median(part)) for part in (left, right) if part.size >= 3]
     return float(np.mean(meds)) if meds else -np.inf
+
+
+def _clear_side(db, i: int, inner: int, outer: int, louder_bins) -> str:
+    """The flank to judge bin ``i`` against: "both", or the one without a louder known
+    peak in it (its top, not a skirt, would lift the floor by tens of dB: as
+    :func:`pick_peaks` judges a shoulder by the side away from the louder peak)."""
+    b = np.asarray(louder_bins, dtype=int)
+    b = b[db[b] > db[i]] if b.size else b
+    in_left = bool(np.any((b >= i - outer) & (b < i - inner)))
+    in_right = bool(np.any((b > i + inner) & (b <= i + outer)))
+    return "right" if in_left and not in_right else "left" if in_right and not in_left else "both"
 
 
 def fit_resonance(freq_hz, mag, i: int, half_hz: float, oversample: float = 1.0,
@@ -761,7 +772,7 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
                      tap_db: float = 3.0, f_ratio: float = 8.0, prominence_db: float = 3.0,
                      ring_hz: float = 250.0, stationary_margin_db: float = 6.0,
                      oversample: float = 1.0, per_window: int = 2, min_width_rel: float = 1e-3,
-                     tap_fraction: float = 0.5):
+                     tap_fraction: float = 0.5, known_bins=()):
     """Faint resonances inside search windows: the guided search for missing modes.
 
     :func:`pick_peaks` demands 15 dB over the noise so that nothing it returns is noise,
@@ -791,6 +802,9 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
         Smallest half-power half-width taken for the floor's flanks and the resonance
         fit, relative to the frequency (a faint peak's measured width is cut short by
         the noise ripple).
+    known_bins : sequence of int
+        Bins of the peaks already picked: a flank that holds one louder than the
+        candidate (an interface mode beside a faint bending mode) is left out of its floor.
 
     Returns
     -------
@@ -821,7 +835,8 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
             # ``min_width_rel`` × f (ζ ≈ 0.1–0.5 % of a tool-holder mode) counts.
             hw = max(half_power_width(f, m, int(i), max_hz=ring_hz / 2), min_width_rel * f[i])
             inner = max(int(np.ceil(4 * hw / df)), 3)
-            over = db[i] - _flank_floor_db(db, int(i), inner, inner + ring)
+            side = _clear_side(db, int(i), inner, inner + ring, known_bins)
+            over = db[i] - _flank_floor_db(db, int(i), inner, inner + ring, side)
             if over < min_db:
                 continue
             if ndb is not None and db[i] - float(np.max(ndb[max(i - 2, 0):i + 3])) < stationary_margin_db:
@@ -829,7 +844,7 @@ def pick_faint_peaks(freq_hz, mag, tap_mag, windows, *, noise_mag=None, min_db: 
             # Each tap's own maximum lies within one native bin (1/segment) of the average's.
             reach = max(int(round(oversample)), 2)
             taps_over = [float(np.max(tdb[k, max(i - reach, 0):i + reach + 1]))
-                         - _flank_floor_db(tdb[k], int(i), inner, inner + ring) for k in range(t.shape[0])]
+                         - _flank_floor_db(tdb[k], int(i), inner, inner + ring, side) for k in range(t.shape[0])]
             if min(taps_over) < max(tap_db, tap_fraction * over):
                 continue
             ratio, f0, gamma = fit_resonance(f, m, int(i), half_hz=max(4 * hw, 8 * df * oversample),

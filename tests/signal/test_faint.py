@@ -121,3 +121,30 @@ def test_a_loud_peak_away_from_the_nominal_expectation_is_labelled_bending():
     assert sorted(got) == [1, 2, 3]
     assert got[2] == pytest.approx(BENDING[1][0], rel=5e-4)
     assert a.bending_peaks[1].reliability == "clear"
+
+
+@pytest.mark.parametrize("seed", [7, 8, 9])
+def test_a_faint_mode_beside_a_loud_known_peak_is_judged_by_the_side_away_from_it(seed):
+    """Mode 2 280 Hz below a loud interface mode (20 dB louder; the realism corpus's val035):
+    the flank holding the loud mode's top lifts the floor by ~10 dB. Told where the picked
+    peaks are, the search judges the faint mode by its other flank, as pick_peaks judges a
+    shoulder; noise beside the same loud peak still passes nothing."""
+    rng = np.random.default_rng(seed)
+    freq = np.arange(0.0, 20000.0, 1.0)
+    taps = _taps(rng, freq)
+    median = np.median(np.abs(taps))
+
+    def mode(f0, zeta, db):
+        return 10 ** (db / 20) * median / np.sqrt(1 + ((freq - f0) / (zeta * f0)) ** 2)
+
+    loud, faint = 9530.0, 9250.0
+    taps_loud = taps + mode(loud, 0.002, 40.0) * np.exp(0.2j)
+    with_mode = np.abs(taps_loud + mode(faint, 0.0015, 14.0) * np.exp(-0.4j))
+    known = [int(np.argmin(np.abs(freq - loud)))]
+    windows = [(8500.0, 9350.0)]  # the guided window, cut at the interface band
+    assert pick_faint_peaks(freq, with_mode.mean(axis=0), with_mode, windows, oversample=4) == []
+    found = pick_faint_peaks(freq, with_mode.mean(axis=0), with_mode, windows, oversample=4, known_bins=known)
+    assert [round(c["hz"]) for c in found] == pytest.approx([faint], abs=3)
+    alone = np.abs(taps_loud)
+    assert pick_faint_peaks(freq, alone.mean(axis=0), alone, windows, oversample=4, known_bins=known,
+                            per_window=100) == []
