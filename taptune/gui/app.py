@@ -184,6 +184,8 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, 
                 if not ended or ended[0] != "finished":
                     print("taptune gui: identification did not finish", file=sys.stderr)
                     status = 1
+                elif not second:
+                    wait_for(window.advice_ready, SCREENSHOT_TIMEOUT_S)  # the picture shows the advice too
             if check and status == 0:
                 window.library_view.select(holder.name)
                 window.start_check()
