@@ -80,6 +80,9 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
     """Let pending background updates and repaints finish before a picture is taken."""
     from PySide6.QtCore import QEventLoop, QTimer
 
+    loop = QEventLoop()
+    QTimer.singleShot(0, loop.quit)  # updates queued to start after a paint (a new identification's)
+    loop.exec()
     if window.predictor.busy:
         wait_for(window.predictor.predicted, predictor_timeout_s)
     if window.machine.busy:

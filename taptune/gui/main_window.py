@@ -599,20 +599,26 @@ class MainWindow(QMainWindow):
         self._set_progress(1.0, "done")
         names = [f"{Path(r.path).name} ({a.stickout * 1e3:g} mm)" for r, a in zip(recordings, assemblies)]
         self.fit.show_identification(result, f"{assembly.holder.name}: measured vs identified model", names)
-        self.set_holder_source(PredictorSource(f"identified now ({assembly.holder.name})",
-                                               tuple(result.param_sets), assembly, self.identify_options.model,
-                                               result.relative_floor, tuple(assemblies),
-                                               measured_modes(result.bending_measured_hz)))
+        source = PredictorSource(f"identified now ({assembly.holder.name})", tuple(result.param_sets), assembly,
+                                 self.identify_options.model, result.relative_floor, tuple(assemblies),
+                                 measured_modes(result.bending_measured_hz))
         self.show_view("fit")
         self.statusBar().showMessage(
             f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
         self._update_actions()
         emit(self.identification_ready, result)
         emit(self.identification_ended, "finished")
-        if len(assemblies) == 1:
-            # After the fitted view has painted (queued before this timer): the advice's
-            # thread would otherwise share the interpreter with the drawing.
-            QTimer.singleShot(0, self, lambda: self._advise(result, assembly))
+        # The predictions (the Predict and Machine views) and the second-tap advice start
+        # after the fitted view has painted (queued before this timer): their threads
+        # would otherwise share the interpreter with the drawing.
+        QTimer.singleShot(0, self, lambda: self._after_identified(result, source, len(assemblies) == 1))
+
+    def _after_identified(self, result, source, advise: bool) -> None:
+        if self.identification is not result:
+            return  # a newer identification has replaced it meanwhile
+        self.set_holder_source(source)
+        if advise:
+            self._advise(result, source.assembly)
 
     def _advise(self, result, assembly) -> None:
         """Ask for a second tap when one recording leaves the bands wide. Its prediction
