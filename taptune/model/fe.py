@@ -14,7 +14,7 @@ per node; the tool-tip w DOF is the second-to-last.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 import scipy.sparse as sp
@@ -294,8 +294,14 @@ def build_model(assembly: Assembly, options: ModelOptions = ModelOptions(), f_ma
     return fe if options == base else assemble(build_mesh(assembly, options), options)
 
 
+@lru_cache(maxsize=64)
 def mesh_frequency_hz(assembly: Assembly, options: ModelOptions = ModelOptions()) -> float | None:
-    """The frequency :func:`build_model`'s final mesh resolves [Hz] (None: it resolves none)."""
+    """The frequency :func:`build_model`'s final mesh resolves [Hz] (None: it resolves none).
+
+    Remembered per (assembly, options), both frozen values: one identification builds the
+    same assembly's model for the label guidance, the fast model and the band, and each
+    first pass is a mesh, an assembly and an eigen-solution (≈ 7 ms).
+    """
     if options.elements_per_wavelength <= 0:
         return None
     base = replace(options, mesh_scale=max(1.0, options.mesh_scale))

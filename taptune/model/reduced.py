@@ -733,7 +733,7 @@ def cached_evaluator(assembly: Assembly, options: ModelOptions = ModelOptions())
     Its build (0.3–0.45 s CPU, mostly the training solutions) is a third of an
     identification, and the user taps the same assembly again and again: in the app, and
     with one ``taptune identify`` per tap, where a fresh process finds it in the disk
-    cache (:mod:`taptune.io.cache`; 15 ms with the full model it is keyed by). The
+    cache (:mod:`taptune.io.cache`; ≈ 20 ms with the full model it is keyed by). The
     evaluator is immutable, so sharing it between identifications and threads is safe.
     """
     from taptune.io.cache import load_arrays, save_arrays
