@@ -176,8 +176,8 @@ def second_tap_advice(predictions) -> str | None:
     worst = max(float(np.max(p.band.relative(p.bending_hz))) for p in wide)
     return (f"one recording only: the bands reach ±{100 * worst:.1f} %; tap the same holder once more at a "
             f"stick-out about 20 mm different and identify both recordings together (taptune identify "
-            f"A.wav B.wav --assembly A.toml B.toml): that pins what one tap cannot tell apart and may hear "
-            f"modes this one did not (the model's own part of the band stays)")
+            f"A.wav B.wav --assembly A.toml --assembly B.toml): that pins what one tap cannot tell apart and "
+            f"may hear modes this one did not (the model's own part of the band stays)")
 
 
 # --------------------------------------------------------------------------- geometry

@@ -148,3 +148,19 @@ def test_demo_runs_on_the_bundled_recording(capsys):
     out = capsys.readouterr().out
     assert "predicted free-free bending modes" in out
     assert "63.5" in out and "73.5" in out
+
+
+def test_the_second_tap_advice_gives_a_command_that_parses():
+    """The advice printed after every one-tap identification quotes a command: it must run."""
+    import re
+    import shlex
+    from types import SimpleNamespace
+
+    from taptune.cli import _build_parser
+    from taptune.identify.bands import second_tap_advice
+
+    band = SimpleNamespace(recordings=1, wide=lambda f: True, relative=lambda f: [0.02])
+    advice = second_tap_advice([SimpleNamespace(band=band, bending_hz=(1.0,))])
+    command = re.search(r"\((taptune identify [^)]*)\)", advice).group(1)
+    args = _build_parser("identify").parse_args(shlex.split(command)[1:])
+    assert args.wav == ["A.wav", "B.wav"] and args.assembly == ["A.toml", "B.toml"]
