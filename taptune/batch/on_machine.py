@@ -20,7 +20,7 @@ from taptune.cli.cmd_lobes import write_lobes_csv
 from taptune.cli.cut import rpm_grid, tool_diameter_mm
 from taptune.errors import InputError
 from taptune.machine import stability_lobes, toolpoint_frf
-from taptune.machine.plane import same_interface
+from taptune.machine.plane import plane_warning, same_interface
 from taptune.report.machine_page import MachineView
 
 JSON_POCKETS = 10  # the best pockets in the JSON; every speed is in the CSV
@@ -106,6 +106,8 @@ def _warnings(assembly, machine, lobes) -> list[str]:
                         f"{assembly.holder.interface!r}")
     if machine.y_from_x:
         warnings.append("the machine file has no [spindle] y; the x receptance is used for y")
+    if plane := plane_warning(assembly.holder, assembly.source):
+        warnings.append(plane)
     return warnings
 
 

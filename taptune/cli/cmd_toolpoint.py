@@ -100,7 +100,7 @@ def machine_inputs(args, what: str):
     from taptune.errors import InputError
     from taptune.io.assembly import load_assembly
     from taptune.io.machine import load_machine
-    from taptune.machine.plane import same_interface
+    from taptune.machine.plane import plane_warning, same_interface
 
     if not (args.holder or args.params):
         raise InputError(f"{what}: give --holder NAME (a library holder) or --params JSON for the holder model")
@@ -118,6 +118,8 @@ def machine_inputs(args, what: str):
                         f"{assembly.holder.interface!r} ({args.assembly})")
     if machine.y_from_x:
         warnings.append(f"{args.machine}: no [spindle] y; the x receptance is used for y")
+    if plane := plane_warning(assembly.holder, args.assembly):
+        warnings.append(plane)
     return assembly, machine, holder, warnings
 
 

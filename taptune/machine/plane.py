@@ -10,6 +10,7 @@ belongs to the spindle side, whose measured receptance already contains it.
 Signatures::
 
     coupling_plane(holder, source="") -> float                   # z_cp [m]
+    plane_warning(holder, source="") -> str | None               # a gauge_length off the taper's end
     cut_holder(holder, source="") -> Holder                      # part z >= z_cp, z from the plane
     cut_assembly(assembly) -> Assembly                           # the same for holder and tool
 """
@@ -95,6 +96,31 @@ def coupling_plane(holder: Holder, source: str = "") -> float:
             f"holder ({holder.length / MM:g} mm): give [holder] gauge_length"
         )
     return shank
+
+
+#: A stated gauge length that moves the plane farther than this from the interface's own
+#: (the end of its taper shank) is questioned [m].
+PLANE_MISMATCH_M = 2e-3
+
+
+def plane_warning(holder: Holder, source: str = "") -> str | None:
+    """A warning when ``gauge_length`` puts the coupling plane away from the end of the
+    interface's taper shank, else None.
+
+    On a holder whose segments include the taper, the two agree; a catalogue gauge length
+    copied for segments that describe another (longer) body does not, and moves the plane
+    without an error (e.g. to the holder's back end, inside the taper).
+    """
+    shank = shank_length(holder.interface)
+    if holder.gauge_length is None or shank is None or shank >= holder.length - TOL_M:
+        return None
+    stated = max(0.0, holder.length - holder.gauge_length)
+    if abs(stated - shank) <= PLANE_MISMATCH_M:
+        return None
+    return (f"{source or holder.name}: [holder] gauge_length = {holder.gauge_length / MM:g} mm puts the coupling "
+            f"plane {stated / MM:g} mm from the holder's spindle-side end, but the {holder.interface} taper shank "
+            f"ends at {shank / MM:g} mm (gauge length {(holder.length - shank) / MM:g} mm on these segments): "
+            f"gauge_length is measured on the described segments, front face to the flange's face contact")
 
 
 def cut_holder(holder: Holder, source: str = "") -> Holder:

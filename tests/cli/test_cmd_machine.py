@@ -75,6 +75,15 @@ def test_toolpoint_on_the_bundled_machine_writes_the_contract(tmp_path, capsys):
     assert (tmp_path / "tp_53.5mm.csv").is_file() and (tmp_path / "tp_70mm.csv").is_file()
 
 
+def test_toolpoint_warns_of_a_catalogue_gauge_length_that_the_segments_contradict(tmp_path, capsys):
+    toml = tmp_path / "x100.toml"
+    text = (RECORDINGS / "er32_d16.toml").read_text()
+    toml.write_text(text.replace('interface = "HSK-A63"', 'interface = "HSK-A63"\ngauge_length = 100.0', 1))
+    code, out, err = taptune(capsys, "toolpoint", toml, *DEMO[1:], "--freq", 100, 8000, 50)
+    assert code == 0, err
+    assert "x100.toml: [holder] gauge_length = 100 mm puts the coupling plane 0 mm" in out + err
+
+
 def test_toolpoint_uff_export_reads_back(tmp_path, capsys):
     pytest.importorskip("pyuff")
     import pyuff

@@ -7,7 +7,7 @@ import pytest
 from taptune.errors import InputError
 from taptune.io.assembly import (assembly_from_toml, assembly_to_toml, holder_from_dict, holder_to_dict,
                                  load_holder, parse_holder)
-from taptune.machine.plane import coupling_plane, cut_assembly, cut_holder, shank_length
+from taptune.machine.plane import coupling_plane, cut_assembly, cut_holder, plane_warning, shank_length
 from tests.conftest import REFERENCE_TOML
 
 MM = 1e-3
@@ -95,3 +95,15 @@ def test_same_interface_ignores_case_spaces_and_punctuation():
 
     assert same_interface("HSK-A63", "hsk a63") and same_interface("SK40", "sk 40")
     assert not same_interface("HSK-A63", "HSK-A100")
+
+
+def test_a_gauge_length_off_the_taper_end_is_questioned_naming_the_file():
+    """The reference holder's segments include the 32 mm HSK-A63 taper, 100 mm in all: its
+    gauge length is 68 mm. The catalogue's "x 100" copied into the file would put the
+    plane at the back end, inside the taper."""
+    assert plane_warning(reference().holder) is None  # the interface decides
+    assert plane_warning(reference("gauge_length = 68.0").holder) is None
+    assert plane_warning(reference("gauge_length = 69.5").holder) is None  # within 2 mm
+    text = plane_warning(reference("gauge_length = 100.0").holder, "ref.toml")
+    assert text.startswith("ref.toml: ") and "0 mm" in text and "32 mm" in text and "68 mm" in text
+    assert plane_warning(reference("gauge_length = 100.0", interface="Capto C6").holder) is None  # unknown taper
