@@ -122,7 +122,8 @@ def run(args) -> int:
                 rows.append(row)
             print("\npredicted free-free bending modes of this holder with this tool:")
             print(format_table(rows, ["stick-out [mm]", "f1 [Hz]", "f2 [Hz]", "f3 [Hz]", "truth f1 f2 f3 [Hz] (synthetic)"]))
-            for w in result.warnings:
+            # The recording's own warnings (a faint peak, a codec's low-pass) first, as identify prints them.
+            for w in dict.fromkeys([w for a in analyses for w in a.warnings] + list(result.warnings)):
                 print(f"warning: {w}", file=sys.stderr)
             print()
             results.append({"case": case.get("name"), "identification": result.to_dict(),
