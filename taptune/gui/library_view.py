@@ -65,7 +65,8 @@ class LibraryView(QWidget):
     Signals
     -------
     changed(dict)
-        The entries after any change (also after opening another library).
+        The entries after any change (also after opening another library); empty, with
+        :attr:`error` set, when the file cannot be read.
     use_for_prediction(object)
         The chosen :class:`~taptune.library.HolderEntry`.
     use_on_machine(object)
@@ -116,6 +117,8 @@ class LibraryView(QWidget):
         layout.addLayout(row)
         layout.addWidget(split, 1)
         self.entries: dict = {}
+        # Why the library file cannot be read (one line naming the file), or None.
+        self.error: str | None = None
         self.set_library(library_path)
 
     # ------------------------------------------------------------------ state
@@ -128,19 +131,24 @@ class LibraryView(QWidget):
 
     def set_library(self, path) -> None:
         self.library_path = Path(path)
-        self.path_label.setText(f"Holder library: {self.library_path}")
         self.refresh()
 
     def refresh(self) -> None:
-        """Re-read the library file (a broken file is reported, never overwritten)."""
+        """Re-read the library file (a broken file is reported, never overwritten).
+
+        A file that cannot be read leaves :attr:`error` set, and the view and a dialog say why.
+        """
         from taptune.errors import TaptuneError
 
         try:
             self.entries = self.library.entries()
+            self.error = None
         except TaptuneError as err:
             self.entries = {}
-            self.details.setHtml(f"<p style='color:#b00020'>{html.escape(str(err))}</p>")
-            show_error(self, "Cannot read the holder library", str(err))
+            self.error = str(err)
+            show_error(self, "Cannot read the holder library", self.error)
+        broken = " (cannot be read)" if self.error is not None else ""
+        self.path_label.setText(f"Holder library: {self.library_path}{broken}")
         self.table.setRowCount(len(self.entries))
         for r, entry in enumerate(self.entries.values()):
             checks = getattr(entry, "checks", ())
@@ -154,7 +162,13 @@ class LibraryView(QWidget):
                     if c == 0:
                         item.setText(f"⚠ {text}")
                 self.table.setItem(r, c, item)
-        if not self.entries:
+        if self.error is not None:
+            # Not "empty": the holders may all be in the file, which a repair brings back.
+            self.details.setHtml(
+                f"<p style='color:#b00020'>{html.escape(self.error)}</p>"
+                "<p>Nothing is saved into this file while it cannot be read. Repair it (or restore "
+                "a copy) and open it again, or open another library.</p>")
+        elif not self.entries:
             self.details.setHtml("<p>The library is empty: identify a holder and save it, or import a library file.</p>")
         elif self.table.currentRow() < 0:
             self.table.selectRow(0)

@@ -261,6 +261,7 @@ class MainWindow(QMainWindow):
         self.recorder.status.connect(self.statusBar().showMessage)
         self.spectrum.relabel_requested.connect(self.relabel_peak)
         self.library_view.changed.connect(self.assembly_panel.reload_choices)
+        self.library_view.changed.connect(lambda _entries: self._update_actions())
         self.library_view.table.itemSelectionChanged.connect(self._update_actions)
         self.library_view.use_for_prediction.connect(self.use_library_entry)
         self.library_view.use_on_machine.connect(self.use_library_entry_on_machine)
@@ -330,7 +331,13 @@ class MainWindow(QMainWindow):
             f"Check this tap against library holder '{holder.name}' (selected in the Library tab)" if holder
             else "Select a holder in the Library tab, and open or record a tap of it, to check it")
         self.cancel_button.setEnabled(identifying)
-        self.save_button.setEnabled(self.identification is not None and not identifying)
+        unreadable = self.library_view.error
+        self.save_button.setEnabled(self.identification is not None and not identifying and unreadable is None)
+        # A file that cannot be read is never written over (the library refuses it too).
+        self.save_button.setToolTip(
+            "" if unreadable is None else
+            f"The holder library cannot be read, so nothing is saved into it: {unreadable}. "
+            "Repair the file or open another library (Library tab).")
         self.open_button.setEnabled(not identifying)
 
     # ------------------------------------------------------------------ recordings
@@ -603,8 +610,13 @@ class MainWindow(QMainWindow):
                                  self.identify_options.model, result.relative_floor, tuple(assemblies),
                                  measured_modes(result.bending_measured_hz))
         self.show_view("fit")
-        self.statusBar().showMessage(
-            f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
+        if self.library_view.error is None:
+            self.statusBar().showMessage(
+                f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
+        else:
+            self.statusBar().showMessage(
+                f"Identified in {result.seconds:.1f} s. The holder library {self.library_view.library_path} "
+                "cannot be read (Library tab), so it cannot be saved there; predict other stick-outs.")
         self._update_actions()
         emit(self.identification_ready, result)
         emit(self.identification_ended, "finished")
@@ -712,7 +724,8 @@ class MainWindow(QMainWindow):
                                               self.identify_options.model)
             HolderLibrary(self.library_view.library_path).put(entry)
         except (TaptuneError, OSError) as err:
-            show_error(self, "Cannot save to the library", f"{err}\nThe identification is kept; try again.")
+            show_error(self, "Cannot save to the library",
+                       f"{err}\nNothing was written; the identification is kept.")
             return None
         self.library_view.refresh()
         self.library_view.select(entry.name)
