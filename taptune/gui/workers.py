@@ -41,7 +41,9 @@ class TaskWorker(QObject):
     finished(object)
         The return value.
     failed(str)
-        A message for the user (the traceback of unexpected errors goes to the log).
+        A message for the user. The traceback of unexpected errors goes to the log at
+        ERROR level; taptune's own errors (:class:`~taptune.errors.TaptuneError`, such as
+        an InputError naming a bad file) only as one line at INFO level.
     cancelled()
         :meth:`cancel` was called and the function stopped.
     """
@@ -88,7 +90,14 @@ class TaskWorker(QObject):
             if self._cancel.is_set():
                 emit(self.cancelled)
             else:
-                log.error("background task failed:\n%s", traceback.format_exc())
+                from taptune.errors import TaptuneError
+
+                if isinstance(err, TaptuneError):
+                    # Bad input or a known condition: its message names the file and the
+                    # problem, and the window shows it; a traceback would only alarm.
+                    log.info("background task failed: %s", err)
+                else:
+                    log.error("background task failed:\n%s", traceback.format_exc())
                 emit(self.failed, describe_error(err))
             return
         if self._cancel.is_set():
