@@ -454,6 +454,19 @@ def load_machine(path) -> Machine:
     return Machine(name, interface, x, y, str(path), y_from_x=not y_name, max_rpm=max_rpm)
 
 
+def machine_file_inputs(path) -> list[str]:
+    """The spindle files a machine TOML names (paths as :func:`load_machine` reads them);
+    [] when the file cannot be read (its reader reports that)."""
+    try:
+        spindle = tomllib.loads(Path(path).read_text(encoding="utf-8")).get("spindle", {})
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    if not isinstance(spindle, dict):
+        return []
+    folder = Path(path).parent
+    return [_relative(folder, spindle[k]) for k in ("x", "y") if isinstance(spindle.get(k), str) and spindle[k]]
+
+
 def _close(a: str, b: str) -> bool:
     """True when ``a`` looks like a misspelling of ``b``."""
     import difflib

@@ -84,6 +84,18 @@ def test_toolpoint_warns_of_a_catalogue_gauge_length_that_the_segments_contradic
     assert "x100.toml: [holder] gauge_length = 100 mm puts the coupling plane 0 mm" in out + err
 
 
+def test_outputs_never_overwrite_the_spindle_files_a_machine_file_names(tmp_path, capsys, monkeypatch):
+    shutil.copytree(RECORDINGS / "machine", tmp_path / "m")
+    monkeypatch.chdir(tmp_path / "m")
+    before = (tmp_path / "m" / "spindle_x.csv").read_bytes()
+    base = [RECORDINGS / "er32_d16.toml", "--params", RECORDINGS / "er32_d16.params.json", "--machine", "machine.toml"]
+    err = one_line_error(capsys, "toolpoint", *base, "--csv", "spindle_x.csv")
+    assert err.startswith("taptune toolpoint: spindle_x.csv: is also an input of this command"), err
+    one_line_error(capsys, "lobes", *base, "--teeth", 3, "--ae", 5, "--milling", "down", "--material", "al7075",
+                   "--json", tmp_path / "m" / "spindle_x.csv")
+    assert (tmp_path / "m" / "spindle_x.csv").read_bytes() == before
+
+
 def test_toolpoint_uff_export_reads_back(tmp_path, capsys):
     pytest.importorskip("pyuff")
     import pyuff
