@@ -399,6 +399,20 @@ def _read_frf_text(path) -> Frf:
 # --------------------------------------------------------------------------- tool-point FRF
 
 
+def check_direct_frf(path, name: str, h: np.ndarray) -> np.ndarray:
+    """A direct (driving-point) receptance of a damped structure has Im ≤ 0 at every
+    frequency (e^{iωt}, MACHINE.md): refuse one of the other sign convention, from which
+    the lobes would be wrong, not merely noisy (a conjugated FRF gave 0.06 mm). Noise may
+    lift some values above 0, and a rigid direction may be given as (near) zero: only an
+    imaginary part that is mostly positive is refused."""
+    negative, positive = float(np.sum(np.clip(-h.imag, 0, None))), float(np.sum(np.clip(h.imag, 0, None)))
+    if positive > negative:
+        raise InputError(f"{path}: {name} has mostly positive imaginary parts: a tool-point FRF has Im ≤ 0 in "
+                         f"taptune's sign convention (displacement/force with e^{{iωt}}); conjugate the file's "
+                         f"imaginary parts")
+    return h
+
+
 def read_toolpoint_csv(path) -> ToolpointFrf:
     """Tool-point FRFs from CSV ``f_hz,xx_re,xx_im[,yy_re,yy_im]`` (y = x when yy is absent)."""
     c = read_csv_columns(path, TOOLPOINT_COLUMNS[:3], "a tool-point FRF file", optional=TOOLPOINT_COLUMNS[3:])
@@ -408,6 +422,8 @@ def read_toolpoint_csv(path) -> ToolpointFrf:
     if any(has_y) and not all(has_y):
         raise InputError(f"{path}: has only one of yy_re, yy_im; give both or neither (y = x)")
     yy = check_receptance(path, "yy", "translational", f, c["yy_re"] + 1j * c["yy_im"], c["_lines"]) if all(has_y) else xx
+    check_direct_frf(path, "xx", xx)
+    check_direct_frf(path, "yy", yy)
     return ToolpointFrf(f, xx, yy, str(path), y_from_x=not all(has_y))
 
 
