@@ -63,9 +63,16 @@ def entry() -> None:
     ``sys.argv`` and exit with its status; a command of :data:`FAST_EXIT` ends the process
     without the interpreter's teardown (:func:`_end_process`). In-process callers use
     :func:`main`, which always returns."""
-    status = _main(None)
-    if _command(sys.argv[1:]) in FAST_EXIT:
-        _end_process(status)
+    try:
+        status = _main(None)
+        if _command(sys.argv[1:]) in FAST_EXIT:
+            _end_process(status)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # The reader closed the pipe (taptune spectrum x.wav | head -1): stop quietly, with
+        # stdout pointed at nothing so that the exit's own flush cannot fail again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise SystemExit(1) from None
     raise SystemExit(status)
 
 

@@ -1,4 +1,4 @@
-"""``taptune identify WAV... --assembly FILE... [--library PATH] [--seed N] [--json OUT] [--plot PNG] [--no-save]``."""
+"""``taptune identify WAV... --assembly FILE... [--library PATH] [--seed N] [--json OUT] [--plot PNG] [--no-save | --save-anyway]``."""
 
 from __future__ import annotations
 
@@ -19,6 +19,9 @@ def add_parser(sub, name, help_text):
     p.add_argument("--plot", metavar="PNG", help="write a picture of the measured spectrum and the fit")
     p.add_argument("--report", metavar="PDF", help="write a one-page-per-recording PDF report")
     p.add_argument("--no-save", action="store_true", help="do not store the holder in the library")
+    p.add_argument("--save-anyway", action="store_true",
+                   help="store the holder even when the fitted model misses a measured mode by more than 5 %% "
+                        "(without it such a fit is reported, exit 2, and not stored)")
     p.add_argument("--jobs", type=int, default=None, help="processes for the optimiser (default: all cores)")
     return p
 
@@ -116,7 +119,7 @@ def run(args) -> int:
         from taptune.library.record import save_identification
 
         try:
-            name = save_identification(args.library, result, recordings, assemblies)
+            name = save_identification(args.library, result, recordings, assemblies, force=args.save_anyway)
         except TaptuneError:
             # The library could not take it (a disk full, a lock held too long): the fit
             # is not lost, the JSON (or the screen) still gets it.

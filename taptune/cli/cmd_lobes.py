@@ -86,8 +86,8 @@ def run(args) -> int:
         write_lobes_csv(args.csv, out)
     if args.json != "-":
         print(f"FRF:  {source}\ncut:  {cut.describe(diameter)}")
-        print(f"critical depth (stable at every speed): {out['a_crit_mm']:.3g} mm  "
-              f"[{rpm[0]:g}–{rpm[-1]:g} rpm]")
+        crit = "none: no depth chatters" if out["a_crit_mm"] is None else f"{out['a_crit_mm']:.3g} mm"
+        print(f"critical depth (stable at every speed): {crit}  [{rpm[0]:g}–{rpm[-1]:g} rpm]")
         rows = [[f"{p['rpm']:.0f}", f"{p['a_lim_mm']:.3g}", _chatter_at(out, p["rpm"])] for p in out["pockets"][:5]]
         print(format_table(rows, ["pocket [rpm]", "a_lim [mm]", "chatter [Hz]"]) if rows
               else "no pockets inside this speed range")

@@ -118,12 +118,21 @@ _INPUT_ARGS = ("wav", "assembly", "params", "machine", "frf", "dummy", "aa", "ab
 
 
 def command_inputs(args) -> list[str]:
-    """The files a command's arguments name as inputs (recordings, assembly, machine files …)."""
+    """The files a command reads (recordings, assembly, machine files and the spindle files a
+    machine file names, the interface-band table of ``$TAPTUNE_INTERFACE_BANDS`` …)."""
+    from taptune.io.machine import machine_file_inputs
+    from taptune.signal.labels import BANDS_ENV
+
     out: list[str] = []
     for name in _INPUT_ARGS:
         value = getattr(args, name, None)
         values = value if isinstance(value, (list, tuple)) else [value]
         out += [str(v) for v in values if isinstance(v, (str, os.PathLike)) and str(v) not in ("", "-")]
+    machine = getattr(args, "machine", None)
+    if isinstance(machine, (str, os.PathLike)) and str(machine):
+        out += machine_file_inputs(machine)
+    if os.environ.get(BANDS_ENV):
+        out.append(os.environ[BANDS_ENV])
     return out
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import pickle
+import signal
 import tempfile
 import threading
 from dataclasses import dataclass
@@ -222,8 +223,15 @@ class _ProgressFlag:
 _SLOTS = 64
 
 
+def _ignore_interrupt() -> None:
+    """Initializer of a worker: Ctrl-C is the parent's to handle (it cancels and stops the
+    pool); a worker taking it too printed its own KeyboardInterrupt traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _join_warm_pool(counts, cancel) -> None:
     """Initializer of a :class:`WarmPool` worker: the shared progress slots and cancel flag."""
+    _ignore_interrupt()
     STATE.update(counts=counts, cancel=cancel, key=None)
 
 
@@ -365,7 +373,7 @@ class Workers:
         self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
         STATE.update(objective=objective, options=options, counts=self.counts,
                      cancel=self.cancel if self.ctx else _ProgressFlag(self.report, self.cancel))
-        self.pool = self.ctx.Pool(jobs) if self.ctx else None
+        self.pool = self.ctx.Pool(jobs, initializer=_ignore_interrupt) if self.ctx else None
 
     def report(self) -> None:
         base, span, message = self.phase

@@ -29,6 +29,8 @@ TOL_M = 1e-8
 MAX_LENGTH_M = 2.0          # no tool or holder is longer than 2 m
 MAX_DIAMETER_M = 1.0        # nor thicker than 1 m
 MIN_DIAMETER_M = 10e-6      # nor thinner than 10 µm (the finest micro tools)
+MIN_BODY_LENGTH_M = 10e-3   # nor a whole tool or holder shorter than 10 mm (below: metres for mm)
+MIN_STICKOUT_M = 1e-3       # a tap needs at least 1 mm of tool out of the holder
 DENSITY_RANGE = (100.0, 30000.0)        # kg/m³: foams … tungsten heavy metal
 MODULUS_RANGE_PA = (0.1e9, 1500e9)      # Pa: polymers … diamond
 
@@ -256,6 +258,9 @@ def validate_holder(h: Holder, src: str) -> Holder:
     _check_material(h.material, "[holder] material", fail)
     if h.length > MAX_LENGTH_M:
         fail("[holder] segments", f"add up to {h.length / MM:g} mm: implausible, above {MAX_LENGTH_M / MM:g} mm")
+    if h.length < MIN_BODY_LENGTH_M:
+        fail("[holder] segments", f"add up to {h.length / MM:g} mm: implausible, below {MIN_BODY_LENGTH_M / MM:g} mm "
+                                  f"(lengths are in millimetres; this looks like metres)")
     return h
 
 
@@ -281,6 +286,12 @@ def validate(asm: Assembly) -> Assembly:
             fail(key, f"must be > 0 mm, got {value / MM:g}")
     if t.total_length > MAX_LENGTH_M:
         fail("[tool] total_length", f"({t.total_length / MM:g} mm) is implausible: above {MAX_LENGTH_M / MM:g} mm")
+    if t.total_length < MIN_BODY_LENGTH_M:
+        fail("[tool] total_length", f"({t.total_length / MM:g} mm) is implausible: below {MIN_BODY_LENGTH_M / MM:g} mm "
+                                    f"(lengths are in millimetres; this looks like metres)")
+    if asm.stickout < MIN_STICKOUT_M:
+        fail("[setup] stickout", f"({asm.stickout / MM:g} mm) is implausible: below {MIN_STICKOUT_M / MM:g} mm "
+                                 f"(lengths are in millimetres)")
     _check_material(t.material, "[tool] material", fail)
     seg_sum = sum(s.length for s in t.segments)
     if abs(seg_sum - t.total_length) > 0.01 * MM + TOL_M:

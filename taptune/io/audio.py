@@ -28,6 +28,9 @@ MIN_SAMPLE_RATE = 8000
 #: The rate a tap analysis needs (MODEL.md §8.3: ≥ 44.1 kHz recommended): the bending
 #: modes ring at 3–20 kHz, so below it the spectrum (ending at half the rate) misses some.
 RECOMMENDED_SAMPLE_RATE = 44100
+#: Longest recording read [s]: a tap test needs a few seconds per tap, and the analysis
+#: holds 20–25 times the file's samples in memory (10 min at 96 kHz stereo: 4 GB).
+MAX_SECONDS = 300.0
 
 #: Files that go straight to PyAV: AAC in MPEG-4/QuickTime/3GPP containers (phone voice
 #: memos and video), raw ADTS AAC, WebM/Matroska audio.
@@ -191,6 +194,8 @@ def read_audio(path) -> Recording:
         with sf.SoundFile(str(p)) as f:
             subtype = f.subtype
             rate = f.samplerate
+            if rate > 0 and f.frames > MAX_SECONDS * rate:
+                raise InputError(_too_long(name, f.frames / rate))
             data = f.read(dtype="float64", always_2d=True)
     except (sf.LibsndfileError, RuntimeError, ValueError, TypeError, EOFError) as err:
         detail = " ".join(str(err).split()) or type(err).__name__
@@ -274,6 +279,11 @@ def wav_data_sizes(path) -> tuple[int, int, int, int] | None:
     return None
 
 
+def _too_long(name: str, seconds: float) -> str:
+    return (f"{name}: {seconds / 60:.1f} min long; taptune reads tap recordings of up to {MAX_SECONDS / 60:g} min "
+            f"(a few seconds per tap): cut the file to the taps")
+
+
 def _read_av(p: Path, name: str):
     """Decode the first audio stream of ``p`` with PyAV: (samples (n, ch) float64, rate, subtype)."""
     try:
@@ -290,11 +300,15 @@ def _read_av(p: Path, name: str):
                 raise InputError(f"{name}: not a readable audio file (unknown audio codec; the file may be corrupt)")
             # FFmpeg names its floating-point MP3 decoder "mp3float"; the codec is MP3.
             codec = {"mp3float": "mp3"}.get(stream.codec_context.name, stream.codec_context.name)
-            chunks, rate, fmt = [], None, None
+            chunks, rate, fmt, frames = [], None, None, 0
             for frame in container.decode(stream):
                 chunks.append(_frame_samples(frame))
                 rate = rate or frame.sample_rate
                 fmt = fmt or frame.format.name.rstrip("p")
+                frames += chunks[-1].shape[0]
+                if frames > MAX_SECONDS * rate:  # decoding the rest could exhaust the memory
+                    duration = float(container.duration or 0) / 1e6 or frames / rate
+                    raise InputError(_too_long(name, max(duration, frames / rate)))
     except InputError:
         raise
     except (av.error.FFmpegError, ValueError, OSError, EOFError) as err:

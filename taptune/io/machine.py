@@ -399,6 +399,20 @@ def _read_frf_text(path) -> Frf:
 # --------------------------------------------------------------------------- tool-point FRF
 
 
+def check_direct_frf(path, name: str, h: np.ndarray) -> np.ndarray:
+    """A direct (driving-point) receptance of a damped structure has Im ≤ 0 at every
+    frequency (e^{iωt}, MACHINE.md): refuse one of the other sign convention, from which
+    the lobes would be wrong, not merely noisy (a conjugated FRF gave 0.06 mm). Noise may
+    lift some values above 0, and a rigid direction may be given as (near) zero: only an
+    imaginary part that is mostly positive is refused."""
+    negative, positive = float(np.sum(np.clip(-h.imag, 0, None))), float(np.sum(np.clip(h.imag, 0, None)))
+    if positive > negative:
+        raise InputError(f"{path}: {name} has mostly positive imaginary parts: a tool-point FRF has Im ≤ 0 in "
+                         f"taptune's sign convention (displacement/force with e^{{iωt}}); conjugate the file's "
+                         f"imaginary parts")
+    return h
+
+
 def read_toolpoint_csv(path) -> ToolpointFrf:
     """Tool-point FRFs from CSV ``f_hz,xx_re,xx_im[,yy_re,yy_im]`` (y = x when yy is absent)."""
     c = read_csv_columns(path, TOOLPOINT_COLUMNS[:3], "a tool-point FRF file", optional=TOOLPOINT_COLUMNS[3:])
@@ -408,6 +422,8 @@ def read_toolpoint_csv(path) -> ToolpointFrf:
     if any(has_y) and not all(has_y):
         raise InputError(f"{path}: has only one of yy_re, yy_im; give both or neither (y = x)")
     yy = check_receptance(path, "yy", "translational", f, c["yy_re"] + 1j * c["yy_im"], c["_lines"]) if all(has_y) else xx
+    check_direct_frf(path, "xx", xx)
+    check_direct_frf(path, "yy", yy)
     return ToolpointFrf(f, xx, yy, str(path), y_from_x=not all(has_y))
 
 
@@ -452,6 +468,19 @@ def load_machine(path) -> Machine:
     y_name = r.text(s, "y", "[spindle]", "")
     y = read_spindle(_relative(folder, y_name)) if y_name else x
     return Machine(name, interface, x, y, str(path), y_from_x=not y_name, max_rpm=max_rpm)
+
+
+def machine_file_inputs(path) -> list[str]:
+    """The spindle files a machine TOML names (paths as :func:`load_machine` reads them);
+    [] when the file cannot be read (its reader reports that)."""
+    try:
+        spindle = tomllib.loads(Path(path).read_text(encoding="utf-8")).get("spindle", {})
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    if not isinstance(spindle, dict):
+        return []
+    folder = Path(path).parent
+    return [_relative(folder, spindle[k]) for k in ("x", "y") if isinstance(spindle.get(k), str) and spindle[k]]
 
 
 def _close(a: str, b: str) -> bool:

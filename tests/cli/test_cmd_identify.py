@@ -164,3 +164,44 @@ def test_the_second_tap_advice_gives_a_command_that_parses():
     command = re.search(r"\((taptune identify [^)]*)\)", advice).group(1)
     args = _build_parser("identify").parse_args(shlex.split(command)[1:])
     assert args.wav == ["A.wav", "B.wav"] and args.assembly == ["A.toml", "B.toml"]
+
+
+def test_a_fit_that_does_not_describe_its_recording_is_not_stored(identified, tap, tmp_path, capsys):
+    """A black-box test stored a fit that missed a mode by 10.5 % (a hydraulic chuck's tap
+    with the ER32 file) over the good holder, exit 0. Now: exit 2, one line naming the
+    recording and the miss, the result still in --json, the library untouched."""
+    _, good_lib, _, _ = identified
+    _, toml = tap
+    wav = REPO / "recordings" / "hydraulic_d20_tap.wav"  # another holder and tool than the file says
+    lib = tmp_path / "lib.json"
+    lib.write_bytes(good_lib.read_bytes())
+    wrong = tmp_path / "wrong.toml"
+    wrong.write_text(toml.read_text())
+    out = tmp_path / "fit.json"
+    code = main(["identify", str(wav), "--assembly", str(wrong), "--library", str(lib), "--json", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    line = err.strip().splitlines()[-1]
+    assert line.startswith(f"taptune identify: {wav}: the fitted model misses bending mode") and "wrong.toml" in line
+    assert "not stored in the library" in line and "Traceback" not in err
+    assert lib.read_bytes() == good_lib.read_bytes()
+    assert json.loads(out.read_text())["bending_model_hz"]
+
+
+def test_save_anyway_stores_a_poor_fit(tmp_path, tap):
+    from types import SimpleNamespace
+
+    from taptune.io.assembly import load_assembly
+    from taptune.library.record import FitTooPoor, save_identification
+    from taptune.library.store import HolderLibrary
+
+    wav, toml = tap
+    asm = load_assembly(toml)
+    result = SimpleNamespace(params=HOLDER_A, param_sets=(HOLDER_A,), objective=529.0, seed=0, evaluations=1,
+                             bending_measured_hz=((4700.0, None, 19900.0),), bending_model_hz=((4702.0, 14900.0, 17810.0),))
+    rec = SimpleNamespace(path=str(wav))
+    with pytest.raises(FitTooPoor, match=r"misses bending mode 3 \(19900 Hz measured, 17810 Hz fitted\) by 10.5 %"):
+        save_identification(tmp_path / "lib.json", result, [rec], [asm])
+    assert not (tmp_path / "lib.json").exists()
+    name = save_identification(tmp_path / "lib.json", result, [rec], [asm], force=True)
+    assert HolderLibrary(tmp_path / "lib.json").get(name).params == HOLDER_A

@@ -84,6 +84,18 @@ def test_toolpoint_warns_of_a_catalogue_gauge_length_that_the_segments_contradic
     assert "x100.toml: [holder] gauge_length = 100 mm puts the coupling plane 0 mm" in out + err
 
 
+def test_outputs_never_overwrite_the_spindle_files_a_machine_file_names(tmp_path, capsys, monkeypatch):
+    shutil.copytree(RECORDINGS / "machine", tmp_path / "m")
+    monkeypatch.chdir(tmp_path / "m")
+    before = (tmp_path / "m" / "spindle_x.csv").read_bytes()
+    base = [RECORDINGS / "er32_d16.toml", "--params", RECORDINGS / "er32_d16.params.json", "--machine", "machine.toml"]
+    err = one_line_error(capsys, "toolpoint", *base, "--csv", "spindle_x.csv")
+    assert err.startswith("taptune toolpoint: spindle_x.csv: is also an input of this command"), err
+    one_line_error(capsys, "lobes", *base, "--teeth", 3, "--ae", 5, "--milling", "down", "--material", "al7075",
+                   "--json", tmp_path / "m" / "spindle_x.csv")
+    assert (tmp_path / "m" / "spindle_x.csv").read_bytes() == before
+
+
 def test_toolpoint_uff_export_reads_back(tmp_path, capsys):
     pytest.importorskip("pyuff")
     import pyuff
@@ -178,6 +190,18 @@ def test_lobes_single_mode_slotting_matches_the_closed_form(tmp_path, capsys):
 
 
 @needs_d01
+def test_lobes_of_a_tool_that_never_chatters_say_so(tmp_path, capsys):
+    """A stiff, real FRF (no negative real part anywhere): no depth chatters — said, not a traceback."""
+    f = np.arange(100.0, 5000.0, 10.0)
+    frf = tmp_path / "stiff.csv"
+    frf.write_text("f_hz,xx_re,xx_im\n" + "".join(f"{x},1e-7,0\n" for x in f))
+    code, out, err = taptune(capsys, "lobes", "--frf", frf, "--diameter", 16, "--material", "al6082", "--teeth", 4,
+                             "--ae", 8, "--milling", "down", "--json", tmp_path / "l.json", "--plot", tmp_path / "l.png")
+    assert code == 0, err
+    assert "critical depth (stable at every speed): none: no depth chatters" in out
+    assert json.loads((tmp_path / "l.json").read_text())["a_crit_mm"] is None and (tmp_path / "l.png").is_file()
+
+
 def test_lobes_from_the_d01_frf_match_the_independent_truth(tmp_path, capsys):
     truth = json.loads((D01 / "lobes_truth.json").read_text())
     a = truth["args"]

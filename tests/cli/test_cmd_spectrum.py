@@ -83,3 +83,13 @@ def test_bad_band_table_and_interface_tap(tap_wav, tmp_path, capsys):
     assert main(["spectrum", str(tap_wav), "--bands", str(bad)]) == 2
     assert str(bad) in capsys.readouterr().err
     assert main(["spectrum", str(tap_wav), "--interface-tap", str(tmp_path / "none.wav")]) == 2
+
+
+def test_an_output_never_overwrites_the_band_table_the_environment_names(tap_wav, tmp_path, capsys, monkeypatch):
+    table = tmp_path / "bands.toml"
+    table.write_text('"HSK-A63" = [[9400, 10600]]\n')
+    monkeypatch.setenv("TAPTUNE_INTERFACE_BANDS", str(table))
+    assert main(["spectrum", str(tap_wav), "--json", str(table)]) == 2
+    err = capsys.readouterr().err
+    assert "is also an input of this command" in err and err.count("\n") == 1
+    assert table.read_text() == '"HSK-A63" = [[9400, 10600]]\n'

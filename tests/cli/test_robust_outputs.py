@@ -356,3 +356,16 @@ def test_an_output_into_a_read_only_folder_is_refused_before_the_work(monkeypatc
                  "--json", str(locked / "fit.json")])
     one_line_exit_2(capsys, code, "fit.json: cannot be written (no permission to write into")
     assert not called
+
+
+def test_a_reader_that_closes_the_pipe_gets_no_traceback(reference_toml):
+    """``taptune model x.toml | head -0``: the reader is gone before the first line."""
+    import subprocess
+    import sys
+
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    proc = subprocess.Popen([sys.executable, "-m", "taptune", "model", str(reference_toml)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(60) == 1 and err == "", err

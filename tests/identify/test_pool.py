@@ -147,3 +147,14 @@ def test_shared_memory_that_cannot_even_make_the_file_falls_back(monkeypatch, tm
     monkeypatch.setattr(search.tempfile, "mkstemp", mkstemp)
     path = search._shared_file(b"blob")
     assert os.path.dirname(path) == str(tmp_path) and open(path, "rb").read() == b"blob"
+
+
+def test_workers_leave_ctrl_c_to_the_parent(warm_pool):
+    """A worker that took SIGINT too printed its own KeyboardInterrupt traceback on Ctrl-C."""
+    import signal
+    from types import SimpleNamespace
+
+    options = SimpleNamespace(jobs=2, islands=2, ga=SimpleNamespace(generations=1))
+    with search.Workers(None, options) as forked:  # the CLI's pool, forked per identification
+        assert forked.pool.apply(signal.getsignal, (signal.SIGINT,)) == signal.SIG_IGN
+    assert warm_pool.pool.apply(signal.getsignal, (signal.SIGINT,)) == signal.SIG_IGN

@@ -45,3 +45,26 @@ def test_holder_segments_adding_up_beyond_two_metres_are_refused():
 def test_an_empty_assembly_file_says_it_is_empty(text):
     with pytest.raises(InputError, match=r"e.toml: is empty \(an assembly file has \[holder\], \[tool\] and \[setup\]"):
         assembly_from_toml(text, "e.toml")
+
+
+def test_an_assembly_written_in_metres_is_refused_in_mm_words():
+    """Before: exit 1, 'the free-free model has no rigid-body pair (…): the matrices are
+    broken', naming no file. Every length of the reference file in metres, then the tool's
+    only, then the stick-out only."""
+    import re
+
+    def metres(m):
+        return f"{m.group(1)} = {float(m.group(2)) / 1000:g}"
+
+    lengths = r"\b(length|od|id|clamp_length|total_length|shank_diameter|flute_length|flute_diameter|stickout) = ([\d.]+)"
+    all_metres = re.sub(lengths, metres, REFERENCE_TOML)
+    with pytest.raises(InputError, match=r"x.toml: \[holder\] segments add up to 0.1 mm: implausible, below 10 mm "
+                                         r"\(lengths are in millimetres; this looks like metres\)"):
+        assembly_from_toml(all_metres, "x.toml")
+    head, tool = REFERENCE_TOML.split("[tool]")
+    tool, setup = tool.split("[setup]")
+    tool_metres = head + "[tool]" + re.sub(lengths, metres, tool) + "[setup]" + setup
+    with pytest.raises(InputError, match=r"x.toml: \[tool\] total_length \(0.0935 mm\) is implausible: below 10 mm"):
+        assembly_from_toml(tool_metres, "x.toml")
+    with pytest.raises(InputError, match=r"x.toml: \[setup\] stickout \(0.0535 mm\) is implausible: below 1 mm"):
+        assembly_from_toml(REFERENCE_TOML.replace("stickout = 53.5", "stickout = 0.0535"), "x.toml")

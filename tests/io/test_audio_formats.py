@@ -178,3 +178,22 @@ def test_an_audio_stream_without_a_known_codec_exits_2_with_one_line(taps, tmp_p
     assert main(["spectrum", str(damaged)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown audio codec" in err and "Traceback" not in err, err
+
+
+def test_a_recording_too_long_for_a_tap_test_is_refused_before_it_fills_the_memory(taps, tmp_path, monkeypatch):
+    """10 min at 96 kHz stereo took 4 GB; a phone's hour would take all. Refused by its
+    length (read from the header, or while decoding), naming the file."""
+    from taptune.io import audio
+
+    import re
+
+    monkeypatch.setattr(audio, "MAX_SECONDS", 0.5)  # the files here are 1.3 s long
+    for kind in ("aac", "mp3", "video"):
+        path = taps[0][kind]
+        with pytest.raises(InputError, match=rf"{re.escape(str(path))}: 0\.0 min long; taptune reads tap "
+                                             r"recordings of up to .* cut the file to the taps"):
+            read_audio(path)
+    wav = tmp_path / "long.wav"
+    write_audio(wav, np.zeros((48000, 1)), 48000)  # 1 s
+    with pytest.raises(InputError, match=r"long.wav: 0.0 min long"):
+        read_audio(wav)

@@ -221,9 +221,24 @@ def test_uff58_spindle_and_frf(tmp_path):
 # --------------------------------------------------------------------------- tool-point FRF
 
 
+def test_a_toolpoint_frf_of_the_other_sign_convention_is_refused(tmp_path):
+    """A direct receptance of a damped tool has Im ≤ 0 (e^{iωt}); a conjugated file gave
+    lobes of 0.06 mm. Noise above 0 and a rigid (zero) direction are accepted."""
+    f = np.arange(105.0, 5000.0, 10.0)
+    h = 1e-7 / (1 - (f / 2000) ** 2 + 0.1j * f / 2000)
+    noisy = h + 2e-9j * np.random.default_rng(0).standard_normal(f.size)
+    assert np.any(noisy.imag > 0)
+    rows = "".join(f"{x},{v.real},{v.imag},0,0\n" for x, v in zip(f, noisy))
+    read_toolpoint_csv(write(tmp_path, "ok.csv", "f_hz,xx_re,xx_im,yy_re,yy_im\n" + rows))
+    flip = write(tmp_path, "flip.csv", "f_hz,xx_re,xx_im,yy_re,yy_im\n" + "".join(
+        f"{x},{v.real},{v.imag},{v.real},{-v.imag}\n" for x, v in zip(f, h)))
+    with pytest.raises(InputError, match=r"flip.csv: yy has mostly positive imaginary parts.*conjugate"):
+        read_toolpoint_csv(flip)
+
+
 def test_toolpoint_round_trip_and_y_from_x(tmp_path):
     f = np.linspace(200.0, 400.0, 5)
-    xx = (1 + 2j) * 1e-8 * np.arange(1, 6)
+    xx = (1 - 2j) * 1e-8 * np.arange(1, 6)  # Im < 0, as a damped tool's direct FRF
     yy = (3 - 1j) * 1e-8 * np.arange(1, 6)
     p = tmp_path / "tp.csv"
     write_toolpoint_csv(p, f, xx, yy, comments=["stick-out 50 mm"])
