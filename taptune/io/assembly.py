@@ -31,6 +31,7 @@ MAX_DIAMETER_M = 1.0        # nor thicker than 1 m
 MIN_DIAMETER_M = 10e-6      # nor thinner than 10 µm (the finest micro tools)
 MIN_BODY_LENGTH_M = 10e-3   # nor a whole tool or holder shorter than 10 mm (below: metres for mm)
 MIN_STICKOUT_M = 1e-3       # a tap needs at least 1 mm of tool out of the holder
+NAME_MAX_LEN = 200          # holder, interface and tool names: one line, as the library keeps them
 DENSITY_RANGE = (100.0, 30000.0)        # kg/m³: foams … tungsten heavy metal
 MODULUS_RANGE_PA = (0.1e9, 1500e9)      # Pa: polymers … diamond
 
@@ -380,7 +381,7 @@ class _Reader:
             self.fail(f"{where} {key}", f"must be a finite number, got {value!r}")
         return float(value)
 
-    def text(self, data: dict, key: str, where: str, default: str | None = None) -> str:
+    def text(self, data: dict, key: str, where: str, default: str | None = None, max_len: int | None = None) -> str:
         if key not in data:
             if default is not None:
                 return default
@@ -388,6 +389,9 @@ class _Reader:
         value = data[key]
         if not isinstance(value, str) or not value.strip():
             self.fail(f"{where} {key}", f"must be a non-empty string, got {value!r}")
+        if max_len is not None and (len(value.strip()) > max_len or any(ord(c) < 32 for c in value)):
+            # What the library stores (a name that would be refused there only after the fit).
+            self.fail(f"{where} {key}", f"must be one line of at most {max_len} characters, got {value[:60]!r}")
         return value.strip()
 
     def material(self, data: dict, where: str, default: Material) -> Material:
@@ -408,8 +412,8 @@ class _Reader:
         """A :class:`Holder` from its table (mm, GPa); not yet validated."""
         gauge = self.number(data, "gauge_length", where) * MM if "gauge_length" in data else None
         return Holder(
-            name=self.text(data, "name", where),
-            interface=self.text(data, "interface", where, "unknown"),
+            name=self.text(data, "name", where, max_len=NAME_MAX_LEN),
+            interface=self.text(data, "interface", where, "unknown", max_len=NAME_MAX_LEN),
             clamp_length=self.number(data, "clamp_length", where) * MM,
             segments=self.segments(data, where),
             material=self.material(data, where, STEEL),
@@ -447,7 +451,7 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
     total = r.number(t, "total_length", "[tool]") * MM
     if "segments" in t:
         tool = Tool(
-            name=r.text(t, "name", "[tool]", "tool"),
+            name=r.text(t, "name", "[tool]", "tool", max_len=NAME_MAX_LEN),
             total_length=total,
             segments=r.segments(t, "[tool]"),
             material=r.material(t, "[tool]", CARBIDE),
@@ -468,7 +472,7 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
         if flute_len >= total - TOL_M:
             r.fail("[tool] flute_length", f"({flute_len / MM:g} mm) must be shorter than total_length ({total / MM:g} mm)")
         tool = Tool(
-            name=r.text(t, "name", "[tool]", "tool"),
+            name=r.text(t, "name", "[tool]", "tool", max_len=NAME_MAX_LEN),
             total_length=total,
             segments=(Segment(total - flute_len, shank), Segment(flute_len, ratio * flute_d)),
             material=r.material(t, "[tool]", CARBIDE),

@@ -52,6 +52,7 @@ from taptune.io.assembly import (
     GPA,
     MAX_STICKOUT_TOLERANCE_MM,
     MM,
+    NAME_MAX_LEN,
     Assembly,
     Holder,
     Material,
@@ -89,7 +90,7 @@ PARAM_UNITS = {
 }
 
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
-_MAX_NAME = 200
+_MAX_NAME = NAME_MAX_LEN  # what an assembly file may name
 
 
 class LibraryFormatError(LibraryError, InputError):

@@ -68,3 +68,13 @@ def test_an_assembly_written_in_metres_is_refused_in_mm_words():
         assembly_from_toml(tool_metres, "x.toml")
     with pytest.raises(InputError, match=r"x.toml: \[setup\] stickout \(0.0535 mm\) is implausible: below 1 mm"):
         assembly_from_toml(REFERENCE_TOML.replace("stickout = 53.5", "stickout = 0.0535"), "x.toml")
+
+
+def test_a_name_the_library_could_not_keep_is_refused_before_the_fit():
+    """A holder name with a line break was refused only when the fit was saved, naming the library."""
+    with pytest.raises(InputError, match=r"x.toml: \[holder\] name must be one line of at most 200 characters"):
+        assembly_from_toml(REFERENCE_TOML.replace('name = "ER32 collet chuck HSK-A63 x 100"',
+                                                  'name = "ER32\\nline two"'), "x.toml")
+    with pytest.raises(InputError, match=r"x.toml: \[tool\] name must be one line"):
+        assembly_from_toml(REFERENCE_TOML.replace('name = "solid carbide end mill D16 4FL"',
+                                                  f'name = "{"x" * 201}"'), "x.toml")
