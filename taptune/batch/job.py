@@ -19,7 +19,7 @@ from taptune.batch.records import BatchOptions, Item, Outcome, ProgressCallback,
 from taptune.cli.common import write_json
 from taptune.errors import InputError
 from taptune.identify import identify
-from taptune.identify.pipeline import analyse_for_assembly
+from taptune.identify.pipeline import analyse_for_assembly, check_distinct
 from taptune.io.audio import read_audio
 from taptune.library.record import save_identification
 from taptune.report.pdf import recording_view, report_pages
@@ -57,6 +57,7 @@ def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCall
     analyses = [g[2] for g in good]
     assemblies = [i.assembly for i in group]
     try:
+        check_distinct(recordings)
         result = identify(analyses, assemblies, id_options, progress=progress)
         if options.save:
             save_identification(options.library, result, recordings, assemblies)

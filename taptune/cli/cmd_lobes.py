@@ -45,6 +45,9 @@ def frf_input(args):
         from taptune.io.machine import read_toolpoint_csv
 
         t = read_toolpoint_csv(args.frf)
+        if t.freq_hz.size < 4:
+            raise InputError(f"{args.frf}: the lobes need at least 4 frequencies of the tool-point FRF, "
+                             f"got {t.freq_hz.size}")
         warnings = [f"{args.frf}: no yy columns; the x FRF is used for y"] if t.y_from_x else []
         return t.freq_hz, t.xx, t.yy, f"measured FRF {args.frf}", None, None, warnings
     if not args.assembly:

@@ -108,6 +108,18 @@ def _full_refinement(r):
     return refine
 
 
+def check_distinct(recordings) -> None:
+    """Refuse a joint fit given the same recording twice (a file and its copy): it would
+    count one tap as two and narrow the bands for nothing."""
+    from taptune.errors import InputError
+
+    for i, a in enumerate(recordings):
+        for b in recordings[:i]:
+            if a.sample_rate == b.sample_rate and np.array_equal(a.samples, b.samples):
+                raise InputError(f"{a.path}: holds the same recording as {b.path}; a joint fit needs different taps "
+                                 f"(the holder at another stick-out, or tapped again)")
+
+
 def identify_recordings(recordings, assemblies, options=None, progress=None, library_params=None):
     """Analyse each recording (model-guided labels) and fit the holder jointly.
 
@@ -130,6 +142,7 @@ def identify_recordings(recordings, assemblies, options=None, progress=None, lib
     from taptune.identify.core import IdentifyOptions, identify
 
     options = options or IdentifyOptions()
+    check_distinct(recordings)
     analyses = [
         analyse_for_assembly(r, a, library_params, options.model) for r, a in zip(recordings, assemblies)
     ]

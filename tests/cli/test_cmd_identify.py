@@ -205,3 +205,16 @@ def test_save_anyway_stores_a_poor_fit(tmp_path, tap):
     assert not (tmp_path / "lib.json").exists()
     name = save_identification(tmp_path / "lib.json", result, [rec], [asm], force=True)
     assert HolderLibrary(tmp_path / "lib.json").get(name).params == HOLDER_A
+
+
+def test_the_same_recording_twice_is_not_a_joint_fit(tap, tmp_path, capsys):
+    """A file and its copy were fitted as two taps (the band narrowed for nothing)."""
+    import shutil
+
+    wav, toml = tap
+    copy = tmp_path / "copy.wav"
+    shutil.copy(wav, copy)
+    assert main(["identify", str(wav), str(copy), "--assembly", str(toml), "--no-save"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (f"taptune identify: {copy}: holds the same recording as {wav}; a joint fit needs "
+                           "different taps (the holder at another stick-out, or tapped again)")

@@ -190,6 +190,14 @@ def test_lobes_single_mode_slotting_matches_the_closed_form(tmp_path, capsys):
 
 
 @needs_d01
+def test_lobes_of_a_two_line_frf_name_the_file(tmp_path, capsys):
+    frf = tmp_path / "short.csv"
+    frf.write_text("f_hz,xx_re,xx_im\n100,1e-7,-1e-9\n200,1e-7,-1e-9\n")
+    err = one_line_error(capsys, "lobes", "--frf", frf, "--diameter", 16, "--material", "al6082", "--teeth", 4,
+                         "--ae", 8, "--milling", "down")
+    assert f"{frf}: the lobes need at least 4 frequencies of the tool-point FRF, got 2" in err
+
+
 def test_lobes_of_a_tool_that_never_chatters_say_so(tmp_path, capsys):
     """A stiff, real FRF (no negative real part anywhere): no depth chatters — said, not a traceback."""
     f = np.arange(100.0, 5000.0, 10.0)
