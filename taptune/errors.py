@@ -20,3 +20,12 @@ class DeviceError(TaptuneError):
 
 class LibraryError(TaptuneError):
     """The holder library file is broken, locked too long, or has no such holder."""
+
+
+class InterruptedAfterWrite(KeyboardInterrupt):
+    """Ctrl-C arrived while a file was being put in place: the new file is complete and
+    stays (``path``); the command stops there."""
+
+    def __init__(self, path):
+        super().__init__(str(path))
+        self.path = path

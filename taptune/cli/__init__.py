@@ -133,7 +133,7 @@ def _main(argv: list[str] | None) -> int:
         parser.print_help()
         return 2
 
-    from taptune.errors import InputError, TaptuneError
+    from taptune.errors import InputError, InterruptedAfterWrite, TaptuneError
 
     try:
         module = importlib.import_module(f"taptune.cli.cmd_{args.command}")
@@ -144,6 +144,10 @@ def _main(argv: list[str] | None) -> int:
     except TaptuneError as err:
         print(f"taptune {args.command}: {err}", file=sys.stderr)
         return 1
+    except InterruptedAfterWrite as err:
+        print(f"taptune {args.command}: interrupted after {err.path} was written (that change is saved)",
+              file=sys.stderr)
+        return 130
     except KeyboardInterrupt:
         print(f"taptune {args.command}: interrupted", file=sys.stderr)
         return 130

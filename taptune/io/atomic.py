@@ -10,12 +10,14 @@ from __future__ import annotations
 import glob
 import os
 import secrets
+import signal
 import stat
 import sys
+import threading
 from pathlib import Path
 from typing import Callable
 
-from taptune.errors import InputError
+from taptune.errors import InputError, InterruptedAfterWrite
 
 
 def _fsync_dir(folder: Path) -> None:
@@ -51,11 +53,48 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None
             os.close(fd)
         if path.exists():
             os.chmod(tmp, stat.S_IMODE(path.stat().st_mode))
-        os.replace(tmp, path)
+        held = _hold_interrupts()
+        try:
+            os.replace(tmp, path)
+        except BaseException:
+            _release_interrupts(held, None)
+            raise
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-    _fsync_dir(path.parent)
+    try:
+        _fsync_dir(path.parent)
+    finally:
+        _release_interrupts(held, path)
+
+
+def _hold_interrupts() -> bool:
+    """Block Ctrl-C (SIGINT) in the main thread while a file is put in place; whether it was.
+
+    A Ctrl-C that lands just after the rename would otherwise report "interrupted" for a
+    change that was made (a large library's write).
+    """
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        return False
+    return signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+def _release_interrupts(held: bool, written) -> None:
+    """Unblock SIGINT; one that arrived meanwhile is taken here and raised as
+    :class:`InterruptedAfterWrite` when ``written`` (the file is in place), else as the
+    KeyboardInterrupt it was."""
+    if not held:
+        return
+    pending = signal.SIGINT in signal.sigpending()
+    if pending:
+        signal.sigwait({signal.SIGINT})  # consumed: it is raised below, once
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    if not pending:
+        return
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        signal.raise_signal(signal.SIGINT)  # a handler of the program's own (or SIG_IGN) decides
+        return
+    raise InterruptedAfterWrite(written) if written is not None else KeyboardInterrupt()
 
 
 def check_writable(path: str | Path) -> None:

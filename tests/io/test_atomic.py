@@ -1,6 +1,7 @@
 """Atomic file writing: the file is wholly old or wholly new, never half of either."""
 
 import os
+import signal
 import stat
 
 import pytest
@@ -39,3 +40,36 @@ def test_stale_temporaries_of_that_file_only_are_removed(tmp_path):
     other.write_bytes(b"x")
     remove_stale_temporaries(path)
     assert not stale.exists() and other.exists()
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="POSIX signal masks")
+def test_ctrl_c_while_the_file_is_put_in_place_says_it_was_written(tmp_path, monkeypatch):
+    """A black-box test: Ctrl-C late in a large library's write reported 'interrupted'
+    (exit 130) for a change that had been made. Ctrl-C just after the rename now raises
+    InterruptedAfterWrite, naming the file; before it, the old file stays."""
+    from taptune.errors import InterruptedAfterWrite
+    from taptune.io import atomic
+
+    target = tmp_path / "lib.json"
+    target.write_text("old")
+    real_replace = os.replace
+
+    def replace_then_ctrl_c(src, dst):
+        real_replace(src, dst)
+        signal.raise_signal(signal.SIGINT)  # held until the write is complete
+
+    monkeypatch.setattr(atomic.os, "replace", replace_then_ctrl_c)
+    with pytest.raises(InterruptedAfterWrite) as info:
+        atomic_write_bytes(target, b"new")
+    assert info.value.path == target and target.read_bytes() == b"new"
+    assert signal.SIGINT not in signal.sigpending() and signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    monkeypatch.undo()
+
+    def ctrl_c_while_writing(tmp):
+        tmp.write_bytes(b"half")
+        signal.raise_signal(signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt) as info:
+        atomic.atomic_write(target, ctrl_c_while_writing)
+    assert not isinstance(info.value, InterruptedAfterWrite) and target.read_bytes() == b"new"
+    assert not list(tmp_path.glob("*.tmp"))
