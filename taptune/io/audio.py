@@ -13,6 +13,7 @@ samples, NaN/Inf samples, a rate below the minimum). Problems that leave the dat
 
 from __future__ import annotations
 
+import os
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -187,6 +188,8 @@ def read_audio(path) -> Recording:
         raise InputError(f"{name}: cannot read ({err.strerror or err})") from None
     if size == 0:
         raise InputError(f"{name}: the file is empty")
+    if not os.access(p, os.R_OK):  # libsndfile would only say "System error"
+        raise InputError(f"{name}: cannot read (permission denied)")
     if p.suffix.lower() in AV_SUFFIXES:
         data, rate, subtype = _read_av(p, name)
         return make_recording(data, rate, path=name, subtype=subtype)

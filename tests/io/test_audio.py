@@ -102,3 +102,14 @@ def test_make_recording_checks_shapes():
     with pytest.raises(InputError):
         make_recording(np.zeros((10, 12)), 48000)
     assert make_recording(np.zeros(10), 48000).channels == 1
+
+
+def test_an_unreadable_file_says_permission_denied(tmp_path, monkeypatch):
+    """libsndfile said only 'System error' (root reads everything, so access is faked here)."""
+    from taptune.io import audio
+
+    path = tmp_path / "locked.wav"
+    audio.write_audio(path, np.zeros((4800, 1)), 48000)
+    monkeypatch.setattr(audio.os, "access", lambda p, mode: False)
+    with pytest.raises(InputError, match=r"locked.wav: cannot read \(permission denied\)"):
+        audio.read_audio(path)
