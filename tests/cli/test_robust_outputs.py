@@ -291,7 +291,8 @@ def test_an_unwritable_library_is_refused_before_the_fit(monkeypatch, tap_wav, r
     from taptune.io import atomic
 
     calls = []
-    monkeypatch.setattr(atomic.os, "access", lambda path, mode: calls.append(path) and False)
+    # Only writing is denied (the recording must still be readable).
+    monkeypatch.setattr(atomic.os, "access", lambda path, mode: not mode & os.W_OK or calls.append(path) or False)
     code = main(["identify", str(tap_wav), "--assembly", str(reference_toml), "--library",
                  str(tmp_path / "lib" / "holders.json")])
     one_line_exit_2(capsys, code, "holders.json: cannot be written (no permission to write into")
