@@ -425,3 +425,18 @@ def test_a_rerun_on_the_same_machine_skips_and_keeps_the_machine_numbers(machine
                                                             machine=machine_setup_for_tests(ae=2.0), **TINY))
     (row,) = other_cut.rows
     assert row.status == "skipped" and row.a_crit_mm is None and "machine part not run" in row.message
+
+
+def test_a_fit_that_does_not_describe_its_recording_is_a_failed_row_and_not_stored(tmp_path):
+    """A hydraulic chuck's tap with the ER32 file: the fit misses a mode by about 10 %."""
+    import shutil
+
+    from tests.conftest import REPO
+
+    shutil.copy(REPO / "recordings" / "hydraulic_d20_tap.wav", tmp_path / "h.wav")
+    (tmp_path / "h.toml").write_text(assembly_text("ER32 h"))
+    result = run_batch([tmp_path / "h.wav"], tiny(tmp_path))
+    (row,) = result.rows
+    assert row.status == "failed" and "the fitted model misses bending mode" in row.message, row
+    assert "not stored in the library" in row.message and row.measured_hz[0] and row.model_hz[0]
+    assert not (tmp_path / "lib.json").exists() and not (tmp_path / "out" / "h.json").exists()

@@ -21,7 +21,7 @@ from taptune.errors import InputError
 from taptune.identify import identify
 from taptune.identify.pipeline import analyse_for_assembly, check_distinct
 from taptune.io.audio import read_audio
-from taptune.library.record import save_identification
+from taptune.library.record import poor_fit, save_identification
 from taptune.report.pdf import recording_view, report_pages
 
 
@@ -59,6 +59,14 @@ def run_job(items: Sequence[Item], options: BatchOptions, progress: ProgressCall
     try:
         check_distinct(recordings)
         result = identify(analyses, assemblies, id_options, progress=progress)
+        if options.save and (reason := poor_fit(result, recordings, assemblies)):
+            # Not stored, and no result JSON (a JSON on disk means the library has it, and
+            # the next batch would skip the file): the row keeps what the fit found.
+            seconds = time.perf_counter() - t0
+            return Outcome(tuple(rows + [
+                Row(str(item.path), item.holder, "failed", first_three(view.bending_measured_hz[0]),
+                    first_three(view.bending_model_hz[0]), view.objective, seconds, one_line(reason))
+                for item, view in ((item, recording_view(result, k)) for k, item in enumerate(group))]))
         if options.save:
             save_identification(options.library, result, recordings, assemblies)
         seconds = time.perf_counter() - t0

@@ -90,11 +90,11 @@ class TaskWorker(QObject):
             if self._cancel.is_set():
                 emit(self.cancelled)
             else:
-                from taptune.errors import TaptuneError
+                from taptune.errors import InputError
 
-                if isinstance(err, TaptuneError):
-                    # Bad input or a known condition: its message names the file and the
-                    # problem, and the window shows it; a traceback would only alarm.
+                if isinstance(err, InputError):
+                    # Bad input: its message names the file and the problem, and the window
+                    # shows it; a traceback would only alarm. A model failure keeps it.
                     log.info("background task failed: %s", err)
                 else:
                     log.error("background task failed:\n%s", traceback.format_exc())

@@ -389,7 +389,7 @@ class _Reader:
         value = data[key]
         if not isinstance(value, str) or not value.strip():
             self.fail(f"{where} {key}", f"must be a non-empty string, got {value!r}")
-        if max_len is not None and (len(value.strip()) > max_len or any(ord(c) < 32 for c in value)):
+        if max_len is not None and (len(value.strip()) > max_len or any(ord(c) < 32 for c in value.strip())):
             # What the library stores (a name that would be refused there only after the fit).
             self.fail(f"{where} {key}", f"must be one line of at most {max_len} characters, got {value[:60]!r}")
         return value.strip()

@@ -68,31 +68,32 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None
         _release_interrupts(held, path)
 
 
-def _hold_interrupts() -> bool:
-    """Block Ctrl-C (SIGINT) in the main thread while a file is put in place; whether it was.
+def _hold_interrupts():
+    """Hold Ctrl-C while a file is put in place: (previous SIGINT handler, caught list), or
+    None off the main thread (only it may set handlers; Python runs them there, whichever
+    thread the signal reached).
 
     A Ctrl-C that lands just after the rename would otherwise report "interrupted" for a
     change that was made (a large library's write).
     """
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
-        return False
-    return signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    caught: list[bool] = []
+    return signal.signal(signal.SIGINT, lambda *_: caught.append(True)), caught
 
 
-def _release_interrupts(held: bool, written) -> None:
-    """Unblock SIGINT; one that arrived meanwhile is taken here and raised as
+def _release_interrupts(held, written) -> None:
+    """Restore the SIGINT handler; a Ctrl-C that arrived meanwhile is raised as
     :class:`InterruptedAfterWrite` when ``written`` (the file is in place), else as the
-    KeyboardInterrupt it was."""
-    if not held:
+    KeyboardInterrupt it was; a handler of the program's own gets it instead."""
+    if held is None:
         return
-    pending = signal.SIGINT in signal.sigpending()
-    if pending:
-        signal.sigwait({signal.SIGINT})  # consumed: it is raised below, once
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-    if not pending:
+    previous, caught = held
+    signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+    if not caught:
         return
-    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        signal.raise_signal(signal.SIGINT)  # a handler of the program's own (or SIG_IGN) decides
+    if previous is not signal.default_int_handler:
+        signal.raise_signal(signal.SIGINT)
         return
     raise InterruptedAfterWrite(written) if written is not None else KeyboardInterrupt()
 

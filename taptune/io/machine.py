@@ -403,10 +403,11 @@ def check_direct_frf(path, name: str, h: np.ndarray) -> np.ndarray:
     """A direct (driving-point) receptance of a damped structure has Im ≤ 0 at every
     frequency (e^{iωt}, MACHINE.md): refuse one of the other sign convention, from which
     the lobes would be wrong, not merely noisy (a conjugated FRF gave 0.06 mm). Noise may
-    lift some values above 0, and a rigid direction may be given as (near) zero: only an
-    imaginary part that is mostly positive is refused."""
+    lift some values above 0, and a rigid direction may be given as (near) zero, pure
+    noise about as much above as below: only an imaginary part three times more positive
+    than negative is refused (a conjugated FRF has almost no negative part)."""
     negative, positive = float(np.sum(np.clip(-h.imag, 0, None))), float(np.sum(np.clip(h.imag, 0, None)))
-    if positive > negative:
+    if positive > 3 * negative:
         raise InputError(f"{path}: {name} has mostly positive imaginary parts: a tool-point FRF has Im ≤ 0 in "
                          f"taptune's sign convention (displacement/force with e^{{iωt}}); conjugate the file's "
                          f"imaginary parts")

@@ -20,14 +20,16 @@ class FitTooPoor(InputError):
 
 def poor_fit(result, recordings, assemblies) -> str | None:
     """Why ``result`` is not fit to store (its worst miss of a measured mode), or None."""
-    worst = None
-    for rec, asm, measured, model in zip(recordings, assemblies, result.bending_measured_hz, result.bending_model_hz):
-        for n, (m, f) in enumerate(zip(measured, model), 1):
-            if m is not None and (worst is None or abs(f / m - 1) > worst[0]):
-                worst = (abs(f / m - 1), n, m, f, rec.path, asm.source)
-    if worst is None or worst[0] <= MAX_SAVED_MISFIT:
+    from taptune.identify.core import fit_misfit
+
+    pairs = list(zip(recordings, assemblies, result.bending_measured_hz, result.bending_model_hz))
+    if max(fit_misfit(measured, model) for _, _, measured, model in pairs) <= MAX_SAVED_MISFIT:
         return None
-    miss, n, m, f, wav, toml = worst
+    # Which recording and mode: for the message.
+    miss, n, m, f, wav, toml = max((abs(f / m - 1), n, m, f, rec.path, asm.source)
+                                   for rec, asm, measured, model in pairs
+                                   for n, (m, f) in enumerate(zip(measured, model), 1)
+                                   if m is not None and f is not None)
     return (f"{wav}: the fitted model misses bending mode {n} ({m:.0f} Hz measured, {f:.0f} Hz fitted) by "
             f"{100 * miss:.1f} %: {toml or 'the assembly'} does not describe this recording (another holder or tool, "
             f"wrong dimensions) or a peak is mislabelled; not stored in the library")

@@ -44,3 +44,13 @@ def test_an_unexpected_error_keeps_its_traceback_in_the_log(qtbot, caplog, err):
     assert failed == [f"unexpected error ({type(err).__name__}: {err})"]
     assert any(r.levelno >= logging.ERROR for r in caplog.records)
     assert "Traceback" in caplog.text and type(err).__name__ in caplog.text
+
+
+def test_a_model_failure_keeps_its_traceback_in_the_log(qtbot, caplog):
+    """Not bad input: a model that cannot be solved is worth its traceback."""
+    from taptune.model.eigen import ModelError
+
+    caplog.set_level(logging.DEBUG, logger="taptune.gui.workers")
+    _run_failing(_fail_with(ModelError("K̃ − ω²M is singular")))
+    assert any(r.levelno >= logging.ERROR for r in caplog.records)
+    assert "Traceback" in caplog.text and "ModelError" in caplog.text

@@ -230,6 +230,11 @@ def test_a_toolpoint_frf_of_the_other_sign_convention_is_refused(tmp_path):
     assert np.any(noisy.imag > 0)
     rows = "".join(f"{x},{v.real},{v.imag},0,0\n" for x, v in zip(f, noisy))
     read_toolpoint_csv(write(tmp_path, "ok.csv", "f_hz,xx_re,xx_im,yy_re,yy_im\n" + rows))
+    rng = np.random.default_rng(1)
+    for k in range(20):  # a rigid direction given as measurement noise: half of these were refused
+        rigid = 1e-12 * (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size))
+        rows = "".join(f"{x},{v.real},{v.imag},{r.real},{r.imag}\n" for x, v, r in zip(f, h, rigid))
+        read_toolpoint_csv(write(tmp_path, f"rigid{k}.csv", "f_hz,xx_re,xx_im,yy_re,yy_im\n" + rows))
     flip = write(tmp_path, "flip.csv", "f_hz,xx_re,xx_im,yy_re,yy_im\n" + "".join(
         f"{x},{v.real},{v.imag},{v.real},{-v.imag}\n" for x, v in zip(f, h)))
     with pytest.raises(InputError, match=r"flip.csv: yy has mostly positive imaginary parts.*conjugate"):
