@@ -9,6 +9,7 @@ only the latest request waits (:class:`~taptune.gui.latest.LatestOnly`).
 
 from __future__ import annotations
 
+import html
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -295,8 +296,11 @@ class MachineView(QWidget):
     def _update_state(self) -> None:
         if self.machine is not None:
             note = "; y uses the x receptance" if self.machine.y_from_x else ""
-            self._set_label(f"<b>Machine:</b> {self.machine.name} ({self.machine.interface}) — "
-                            f"{Path(self.machine.source).name}{note}")
+            text = [html.escape(t, quote=False) for t in (self.machine.name, self.machine.interface,
+                                                          Path(self.machine.source).name)]
+            warnings = "".join(f"<br><span style='color:#b35900'>⚠ {html.escape(w, quote=False)}</span>"
+                               for w in self.setup_warnings())
+            self._set_label(f"<b>Machine:</b> {text[0]} ({text[1]}) — {text[2]}{note}{warnings}")
         elif not self.machine_label.text():
             self._set_label("Choose the machine file of the spindle (docs/machine.md): it is remembered for next time.")
         ready = self.machine is not None and self.source is not None
@@ -307,6 +311,22 @@ class MachineView(QWidget):
                                         self.source is not None)) if not ok]
             self._artists = None
             self.canvas.message("Needs " + " and ".join(missing) + ".")
+
+    def setup_warnings(self) -> list[str]:
+        """What the command line warns about this holder on this machine: another interface,
+        a gauge_length that moves the coupling plane off the taper's end."""
+        from taptune.machine.plane import plane_warning, same_interface
+
+        if self.machine is None or self.source is None:
+            return []
+        holder = self.source.assembly.holder
+        out = []
+        if not same_interface(self.machine.interface, holder.interface):
+            out.append(f"the machine's interface {self.machine.interface!r} differs from the holder's "
+                       f"{holder.interface!r}")
+        if plane := plane_warning(holder, self.source.assembly.source):
+            out.append(plane)
+        return out
 
     # ------------------------------------------------------------------ updates
 

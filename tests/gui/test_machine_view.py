@@ -130,3 +130,25 @@ def test_screenshot_of_the_machine_view(holder_a, library_path, tmp_path, refere
                  "--machine", str(MACHINE), "--view", "machine", "--screenshot", str(png)]) == 0
     image = QImage(str(png))
     assert (image.width(), image.height()) == (1366, 768)
+
+
+def test_the_machine_view_warns_of_another_interface_and_an_off_plane_gauge_length(qtbot, window, holder_a,
+                                                                                 reference_assembly, tmp_path):
+    """As toolpoint and lobes do on the command line (the app said nothing)."""
+    import shutil
+    from dataclasses import replace
+
+    _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    assert view.setup_warnings() == [] and "⚠" not in view.machine_label.text()
+    for name in ("machine.toml", "spindle_x.csv", "spindle_y.csv"):
+        shutil.copy(MACHINE.parent / name, tmp_path / name)
+    other = tmp_path / "machine.toml"
+    other.write_text(other.read_text().replace('interface = "HSK-A63"', 'interface = "BT40"'))
+    assert view.load_machine(str(other), remember=False)
+    assert "the machine's interface 'BT40' differs from the holder's 'HSK-A63'" in view.machine_label.text()
+    catalogue = replace(view.source, assembly=view.source.assembly.with_holder(
+        replace(view.source.assembly.holder, gauge_length=0.100)))
+    view.set_source(catalogue)
+    text = view.machine_label.text()
+    assert "gauge_length = 100 mm puts the coupling plane 0 mm" in text and "gauge length 68 mm" in text
