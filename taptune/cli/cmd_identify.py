@@ -116,16 +116,18 @@ def run(args) -> int:
         bar.close()
     out = identification_record(recordings, assemblies, analyses, result)
     if not args.no_save:
-        from taptune.library.record import save_identification
+        from taptune.library.record import FitTooPoor, save_identification
 
         try:
             name = save_identification(args.library, result, recordings, assemblies, force=args.save_anyway)
-        except TaptuneError:
-            # The library could not take it (a disk full, a lock held too long): the fit
-            # is not lost, the JSON (or the screen) still gets it.
+        except TaptuneError as err:
+            # The library could not take it (a disk full, a lock held too long) or the fit
+            # is too poor to store: it is not lost, the JSON (or the screen) still gets it.
             write_json(out, args.json)
             if args.json != "-":
                 print_summary(out, result)
+            if isinstance(err, FitTooPoor):
+                raise FitTooPoor(f"{err} (--save-anyway stores it)") from None
             raise
         out["library_entry"] = name
     write_json(out, args.json)
