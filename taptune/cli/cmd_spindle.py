@@ -48,6 +48,13 @@ def read_measurements(args):
                 f"{other.source}: its frequency grid ({len(other.freq_hz)} points, {other.freq_hz[0]:g}–"
                 f"{other.freq_hz[-1]:g} Hz) differs from {ref.source}'s ({len(ref.freq_hz)} points, "
                 f"{ref.freq_hz[0]:g}–{ref.freq_hz[-1]:g} Hz); export the three FRFs on one grid")
+    names = ("--aa", "--ab", "--bb")
+    for i in range(3):
+        for j in range(i):
+            if np.array_equal(frfs[i].h, frfs[j].h):  # one file given twice, or a copy of it
+                raise InputError(f"{frfs[i].source}: {names[i]} holds the same FRF as {names[j]} "
+                                 f"({frfs[j].source}); G_aa, G_ab and G_bb are three measurements (hammer at a, "
+                                 f"accelerometer at a; hammer at a, accelerometer at b; both at b)")
     return ref.freq_hz, frfs[0].h, frfs[1].h, frfs[2].h
 
 

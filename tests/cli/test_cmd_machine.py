@@ -371,6 +371,11 @@ def test_spindle_bad_inputs_end_in_one_line(tmp_path, capsys):
     assert "name the file .csv" in one_line_error(capsys, *base, "--aa", a, "--ab", a, "--bb", a, "--out", tmp_path / "s.uff")
     assert "--smooth" in one_line_error(capsys, *base, "--aa", a, "--ab", a, "--bb", a, "--out", tmp_path / "s.csv",
                                         "--smooth", "lots")
+    # One file (or a copy) for two measurements: a mistake the inverse coupling would not notice.
+    c = tmp_path / "c.csv"
+    c.write_text(a.read_text().replace("-1e-9\n300", "-2e-9\n300"))
+    assert f"{a}: --bb holds the same FRF as --aa ({a})" in one_line_error(
+        capsys, *base, "--aa", a, "--ab", c, "--bb", a, "--out", tmp_path / "s.csv")
     assert "missing.frf: no such file" in one_line_error(capsys, *base, "--aa", tmp_path / "missing.frf", "--ab", a, "--bb", a,
                                                           "--out", tmp_path / "s.csv")
     bad = tmp_path / "bad.frf"
