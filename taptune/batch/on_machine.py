@@ -20,7 +20,7 @@ from taptune.cli.cmd_lobes import write_lobes_csv
 from taptune.cli.cut import rpm_grid, tool_diameter_mm
 from taptune.errors import InputError
 from taptune.machine import stability_lobes, toolpoint_frf
-from taptune.machine.plane import plane_warning, same_interface
+from taptune.machine.plane import interface_warning, plane_warning
 from taptune.report.machine_page import MachineView
 
 JSON_POCKETS = 10  # the best pockets in the JSON; every speed is in the CSV
@@ -101,9 +101,8 @@ def failed_part(base: dict, title: str, message: str) -> MachinePart:
 
 def _warnings(assembly, machine, lobes) -> list[str]:
     warnings = list(lobes.warnings)
-    if not same_interface(machine.interface, assembly.holder.interface):
-        warnings.append(f"the machine's interface {machine.interface!r} differs from the holder's "
-                        f"{assembly.holder.interface!r}")
+    if interface := interface_warning(machine.interface, assembly.holder):
+        warnings.append(interface)
     if machine.y_from_x:
         warnings.append("the machine file has no [spindle] y; the x receptance is used for y")
     if plane := plane_warning(assembly.holder, assembly.source):

@@ -95,8 +95,9 @@ def run(args) -> int:
         from taptune.library.store import default_library_path
 
         library = default_library_path(args.library)
+    inputs = command_inputs(args)
     for path, what in ((args.json, "JSON"), (args.plot, "plot"), (args.report, "report")):
-        output_path(path, what, library=args.library, inputs=command_inputs(args))
+        output_path(path, what, library=args.library, inputs=inputs)
     recordings, assemblies = load_inputs(args.wav, args.assembly)
     if library is not None:
         from taptune.io.atomic import check_writable

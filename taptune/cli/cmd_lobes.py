@@ -43,11 +43,12 @@ def frf_input(args):
         if extra:
             raise InputError(f"--frf {args.frf}: the FRF is measured; {', '.join(extra)} belong to the predicted one")
         from taptune.io.machine import read_toolpoint_csv
+        from taptune.machine.lobes import MIN_FREQUENCIES
 
         t = read_toolpoint_csv(args.frf)
-        if t.freq_hz.size < 4:
-            raise InputError(f"{args.frf}: the lobes need at least 4 frequencies of the tool-point FRF, "
-                             f"got {t.freq_hz.size}")
+        if t.freq_hz.size < MIN_FREQUENCIES:
+            raise InputError(f"{args.frf}: the lobes need at least {MIN_FREQUENCIES} frequencies of the "
+                             f"tool-point FRF, got {t.freq_hz.size}")
         warnings = [f"{args.frf}: no yy columns; the x FRF is used for y"] if t.y_from_x else []
         return t.freq_hz, t.xx, t.yy, f"measured FRF {args.frf}", None, None, warnings
     if not args.assembly:
@@ -71,8 +72,9 @@ def run(args) -> int:
     from taptune.errors import InputError
     from taptune.machine import stability_lobes
 
+    inputs = command_inputs(args)
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.plot, "plot")):
-        output_path(path, what, library=args.library, inputs=command_inputs(args))
+        output_path(path, what, library=args.library, inputs=inputs)
     cut = cut_options(args)  # the whole cut checked before the tool-point FRF is computed
     if args.frf and args.diameter is None:
         raise InputError("--frf needs --diameter MM (the tool diameter)")

@@ -31,8 +31,9 @@ def run(args) -> int:
     from taptune.io.assembly import load_assembly
     from taptune.library.store import HolderLibrary, default_library_path
 
-    output_path(args.json, "JSON", library=args.library, inputs=command_inputs(args))
-    output_path(args.plot, "plot", library=args.library, inputs=command_inputs(args))
+    inputs = command_inputs(args)
+    output_path(args.json, "JSON", library=args.library, inputs=inputs)
+    output_path(args.plot, "plot", library=args.library, inputs=inputs)
     assembly = load_assembly(args.assembly)
     entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
     warnings = list(entry.warnings) + list(assembly.warnings)

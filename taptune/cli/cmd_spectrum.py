@@ -52,8 +52,9 @@ def run(args) -> int:
     from taptune.io.audio import read_audio
     from taptune.signal.analysis import SpectrumOptions, analyse_recording
 
-    output_path(args.json, "JSON", inputs=command_inputs(args))
-    output_path(args.plot, "plot", inputs=command_inputs(args))
+    inputs = command_inputs(args)
+    output_path(args.json, "JSON", inputs=inputs)
+    output_path(args.plot, "plot", inputs=inputs)
     recording = read_audio(args.wav)
     interface_tap = read_audio(args.interface_tap) if args.interface_tap else None
     options = SpectrumOptions()

@@ -94,8 +94,9 @@ def run(args) -> int:
 
     if Path(args.out).suffix.lower() != ".csv":
         raise InputError(f"--out {args.out}: the spindle receptance is written as CSV; name the file .csv")
+    inputs = command_inputs(args)
     for path, what in ((args.out, "spindle receptance"), (args.json, "JSON"), (args.plot, "plot")):
-        output_path(path, what, inputs=command_inputs(args))
+        output_path(path, what, inputs=inputs)
     smooth = smoothing(args.smooth)
     dummy = load_holder(args.dummy)
     freq, g_aa, g_ab, g_bb = read_measurements(args)

@@ -177,8 +177,9 @@ def run(args) -> int:
     from taptune.cli.common import command_inputs, format_table, output_path, write_json
     from taptune.io.machine import write_toolpoint_csv
 
+    inputs = command_inputs(args)
     for path, what in ((args.json, "JSON"), (args.csv, "CSV"), (args.uff, "universal file"), (args.plot, "plot")):
-        output_path(path, what, library=args.library, inputs=command_inputs(args))
+        output_path(path, what, library=args.library, inputs=inputs)
     assembly, machine, holder, warnings = machine_inputs(args, "toolpoint")
     freq = frequency_grid(args, machine)
     frfs, assemblies = toolpoint_frfs(assembly, machine, holder, freq, args.stickout, args.contact)

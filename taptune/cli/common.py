@@ -121,7 +121,7 @@ def command_inputs(args) -> list[str]:
     """The files a command reads (recordings, assembly, machine files and the spindle files a
     machine file names, the interface-band table of ``$TAPTUNE_INTERFACE_BANDS`` …)."""
     from taptune.io.machine import machine_file_inputs
-    from taptune.signal.labels import BANDS_ENV
+    from taptune.io.files import BANDS_ENV
 
     out: list[str] = []
     for name in _INPUT_ARGS:

@@ -315,18 +315,13 @@ class MachineView(QWidget):
     def setup_warnings(self) -> list[str]:
         """What the command line warns about this holder on this machine: another interface,
         a gauge_length that moves the coupling plane off the taper's end."""
-        from taptune.machine.plane import plane_warning, same_interface
+        from taptune.machine.plane import interface_warning, plane_warning
 
         if self.machine is None or self.source is None:
             return []
         holder = self.source.assembly.holder
-        out = []
-        if not same_interface(self.machine.interface, holder.interface):
-            out.append(f"the machine's interface {self.machine.interface!r} differs from the holder's "
-                       f"{holder.interface!r}")
-        if plane := plane_warning(holder, self.source.assembly.source):
-            out.append(plane)
-        return out
+        found = (interface_warning(self.machine.interface, holder), plane_warning(holder, self.source.assembly.source))
+        return [w for w in found if w]
 
     # ------------------------------------------------------------------ updates
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import secrets
 import sys
 import zipfile
 from pathlib import Path
@@ -98,26 +97,23 @@ def load_arrays(kind: str, key: str) -> dict[str, np.ndarray] | None:
 def save_arrays(kind: str, key: str, arrays: dict[str, np.ndarray]) -> bool:
     """Keep ``arrays`` under ``key``; False when the folder cannot take them (nothing kept).
 
-    Written beside and renamed, so a reader sees the whole entry or none; then the
-    oldest entries beyond :data:`MAX_ENTRIES` are removed.
+    Written beside and renamed (:func:`taptune.io.atomic.atomic_write`), so a reader sees
+    the whole entry or none; then the oldest entries beyond :data:`MAX_ENTRIES` are removed.
     """
+    from taptune.io.atomic import atomic_write
+
     path = _path(kind, key)
     if path is None:
         return False
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:  # a file object: given a name, np.savez would append ".npz"
             np.savez(f, _key=np.array(key), **arrays)
-        os.replace(tmp, path)
-    except BaseException as err:  # an interrupted write leaves no temporary file behind either
-        try:
-            tmp.unlink(missing_ok=True)
-        except OSError:
-            pass  # no folder, so no temporary file either
-        if isinstance(err, OSError):
-            return False
-        raise
+
+    try:
+        atomic_write(path, write)  # an interrupted write leaves no temporary file behind
+    except OSError:
+        return False
     _prune(path.parent)
     return True
 

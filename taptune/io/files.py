@@ -6,6 +6,11 @@ from pathlib import Path
 
 from taptune.errors import InputError
 
+#: The environment variable that names the user's table of interface local-mode bands
+#: (read by :func:`taptune.signal.labels.interface_bands`; here so that the command line
+#: can protect that file from being written over without importing the analysis).
+BANDS_ENV = "TAPTUNE_INTERFACE_BANDS"
+
 
 def read_text(path: str | Path, what: str, expected: str) -> str:
     """The UTF-8 text of ``path``; every problem is an InputError naming the file.

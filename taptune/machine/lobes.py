@@ -46,6 +46,8 @@ from taptune.errors import InputError
 from taptune.machine.peaks import dominant_modes
 
 MM = 1e-3
+#: Fewest frequencies of a tool-point FRF the lobes are computed from.
+MIN_FREQUENCIES = 4
 #: Half-power bandwidths on each side of a dominant peak where the scan is refined.
 REFINE_BANDS = 6.0
 MILLING = ("up", "down")
@@ -366,8 +368,8 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
     pxx = np.asarray(phi_xx, dtype=complex)
     pyy = pxx if phi_yy is None else np.asarray(phi_yy, dtype=complex)
     speeds = np.asarray(rpm, dtype=float)
-    if f.ndim != 1 or len(f) < 4 or pxx.shape != f.shape or pyy.shape != f.shape:
-        raise InputError("the tool-point FRF needs at least 4 frequencies with one value each")
+    if f.ndim != 1 or len(f) < MIN_FREQUENCIES or pxx.shape != f.shape or pyy.shape != f.shape:
+        raise InputError(f"the tool-point FRF needs at least {MIN_FREQUENCIES} frequencies with one value each")
     if np.any(np.diff(f) <= 0) or f[0] <= 0:
         raise InputError("the FRF frequencies must be positive and strictly ascending")
     if not (int(teeth) == teeth and teeth >= 1):

@@ -11,6 +11,7 @@ Signatures::
 
     coupling_plane(holder, source="") -> float                   # z_cp [m]
     plane_warning(holder, source="") -> str | None               # a gauge_length off the taper's end
+    interface_warning(machine_interface, holder) -> str | None   # the machine's interface is another
     cut_holder(holder, source="") -> Holder                      # part z >= z_cp, z from the plane
     cut_assembly(assembly) -> Assembly                           # the same for holder and tool
 """
@@ -56,6 +57,13 @@ def same_interface(a: str, b: str) -> bool:
         return "".join(ch for ch in name.upper() if ch.isalnum())
 
     return plain(a) == plain(b)
+
+
+def interface_warning(machine_interface: str, holder: Holder) -> str | None:
+    """A warning when the machine's interface is not the holder's (:func:`same_interface`), else None."""
+    if same_interface(machine_interface, holder.interface):
+        return None
+    return f"the machine's interface {machine_interface!r} differs from the holder's {holder.interface!r}"
 
 
 def shank_length(interface: str) -> float | None:

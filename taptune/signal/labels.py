@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.io.files import read_text
+from taptune.io.files import BANDS_ENV, read_text
 from taptune.signal.peaks import Peak
 
 #: Local-mode bands of one interface: ((lo_hz, hi_hz), ...).
@@ -45,8 +45,7 @@ BUILTIN_BANDS: dict[str, Bands] = {
 #: Frequency factor of the material corner in the upper bounds of MODEL.md §7.6
 #: (modulus factor 1.10, density factor 0.95).
 UPPER_BOUND_MATERIAL = float(np.sqrt(1.10 / 0.95))
-#: Environment variable naming an extra band table (TOML or JSON).
-BANDS_ENV = "TAPTUNE_INTERFACE_BANDS"
+# BANDS_ENV (taptune.io.files) names an extra band table (TOML or JSON).
 
 
 def _norm(name: str) -> str:

@@ -107,3 +107,11 @@ def test_a_gauge_length_off_the_taper_end_is_questioned_naming_the_file():
     text = plane_warning(reference("gauge_length = 100.0").holder, "ref.toml")
     assert text.startswith("ref.toml: ") and "0 mm" in text and "32 mm" in text and "68 mm" in text
     assert plane_warning(reference("gauge_length = 100.0", interface="Capto C6").holder) is None  # unknown taper
+
+
+def test_interface_warning_names_both_interfaces_or_is_none():
+    from taptune.machine.plane import interface_warning
+
+    holder = reference().holder
+    assert interface_warning("hsk-a 63", holder) is None
+    assert interface_warning("BT40", holder) == "the machine's interface 'BT40' differs from the holder's 'HSK-A63'"
