@@ -28,6 +28,7 @@ COMMANDS = {
     "library": "list, show, export, import or remove holders; export receptances (UFF58, CSV)",
     "record": "record taps from the microphone into a WAV file",
     "gui": "the desktop app",
+    "examples": "copy the example assemblies, recordings and machine into a folder",
 }
 
 

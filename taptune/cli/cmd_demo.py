@@ -1,7 +1,8 @@
 """``taptune demo``: tap → holder → predictions at two other stick-outs, on bundled data.
 
-The example recordings in ``recordings/`` are synthetic (made by
-``scripts/make_recordings.py`` from the model plus workshop nuisances); each has a
+The example recordings that ship with taptune (:mod:`taptune.examples`; the repository's
+``recordings/``) are synthetic (made by ``scripts/make_recordings.py`` from the model plus
+workshop nuisances); each has a
 ``.truth.json`` with the parameters it was made from, so the demo can show how close
 the predictions come.
 """
@@ -19,7 +20,8 @@ def add_parser(sub, name, help_text):
     p = sub.add_parser(name, help=help_text, description=(
         "Identify the holder of a bundled example recording, store it in a library (a temporary one "
         "unless --library is given) and predict the same holder at two other stick-outs."))
-    p.add_argument("--recordings", metavar="DIR", help="folder with demo.json (default: the bundled recordings/)")
+    p.add_argument("--recordings", metavar="DIR", help="folder with demo.json (default: the example recordings that ship with taptune; "
+                        "'taptune examples DIR' copies them out)")
     p.add_argument("--case", metavar="NAME", help="run only this example (default: the first)")
     p.add_argument("--all", action="store_true", help="run every example")
     p.add_argument("--library", metavar="PATH", help="keep the identified holders in this library")
@@ -29,8 +31,10 @@ def add_parser(sub, name, help_text):
 
 
 def bundled_recordings() -> Path:
-    """The repository's recordings/ folder (next to the package)."""
-    return Path(__file__).resolve().parents[2] / "recordings"
+    """The example recordings that ship with taptune (package data; the clone's recordings/)."""
+    from taptune.examples import recordings_dir
+
+    return recordings_dir()
 
 
 def _read_json(path: Path, what: str):
@@ -49,7 +53,8 @@ def load_manifest(folder: Path) -> list[dict]:
 
     path = folder / "demo.json"
     if not path.exists():
-        raise InputError(f"{path}: no such file (the demo needs the bundled recordings; run scripts/make_recordings.py)")
+        raise InputError(f"{path}: no such file (--recordings needs a folder with demo.json, such as the "
+                         "recordings/ that 'taptune examples DIR' copies out)")
     data = _read_json(path, "a demo manifest")
     cases = data.get("cases") if isinstance(data, dict) else None
     if not isinstance(cases, list) or not cases:

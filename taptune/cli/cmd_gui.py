@@ -1,4 +1,4 @@
-"""``taptune gui``: the desktop app; with ``--screenshot`` a PNG of its window (CLI-CONTRACT.md)."""
+"""``taptune gui``: the desktop app; with ``--screenshot`` a PNG of its window (docs/cli.md)."""
 
 from __future__ import annotations
 
@@ -37,9 +37,25 @@ def add_parser(sub, name: str, help_text: str) -> None:
                    help="with --screenshot: check WAV against --holder first (the check is saved to its history)")
 
 
+def require_qt() -> None:
+    """One line naming the extra to install when PySide6 is missing (it is optional)."""
+    import importlib.util
+
+    from taptune.errors import TaptuneError
+
+    try:
+        found = importlib.util.find_spec("PySide6") is not None
+    except (ImportError, ValueError):
+        found = False
+    if not found:
+        raise TaptuneError("the desktop app needs PySide6, which is not installed here: pip install 'taptune[gui]'")
+
+
 def run(args) -> int:
     from taptune.cli.common import command_inputs, output_path
     from taptune.errors import InputError
+
+    require_qt()
 
     output_path(args.screenshot, "screenshot", library=args.library, inputs=command_inputs(args))  # a folder or an unwritable place: now, not after the window
     for wav in (args.wav, args.second):

@@ -40,8 +40,10 @@ INTERFACES = ("HSK-A63", "HSK-A100", "HSK-E40", "SK40", "BT40", "CAT40", "unknow
 
 
 def assets_dir() -> Path:
-    """The ``assets/`` folder of holder and tool geometries shipped with taptune."""
-    return Path(__file__).resolve().parents[2] / "assets"
+    """The holder and tool geometries shipped with taptune (the clone's ``assets/``; package data when installed)."""
+    from taptune.examples import assets_dir as shipped
+
+    return shipped()
 
 
 def read_asset_tables(folder: Path) -> tuple[list[tuple[str, dict]], list[tuple[str, dict]]]:

@@ -210,6 +210,7 @@ def test_lobes_of_a_tool_that_never_chatters_say_so(tmp_path, capsys):
     assert json.loads((tmp_path / "l.json").read_text())["a_crit_mm"] is None and (tmp_path / "l.png").is_file()
 
 
+@needs_d01
 def test_lobes_from_the_d01_frf_match_the_independent_truth(tmp_path, capsys):
     truth = json.loads((D01 / "lobes_truth.json").read_text())
     a = truth["args"]
