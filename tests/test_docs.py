@@ -109,3 +109,110 @@ def test_the_assets_examples_in_the_assembly_page_are_the_files():
             geometry = (shown.holder, shown.tool, shown.stickout)
             assert any((a.holder, a.tool, a.stickout) == geometry for a in map(load_assembly, [REPO / f for f in files])), (
                 f"{files}: the page shows another geometry")
+
+
+# --------------------------------------------------------------------------- the documented commands
+
+# Options and positionals that name a file or folder taptune reads, and those it writes.
+READS = {"wav", "assembly", "params", "machine", "frf", "dummy", "aa", "ab", "bb", "paths", "interface_tap",
+         "bands", "recordings", "file", "second"}
+WRITES = {"out", "json", "plot", "csv", "uff", "report", "screenshot", "dir", "library"}
+# Files a page's commands read that the user makes first; the page's prose must say so
+# (name each one outside its code blocks).
+USER_FILES = {
+    "tap-test.md": {"tap.wav", "my.toml", "other-tool.toml"},
+    "library.md": {"colleague.json"},
+    "machine.md": {"dummy.toml", "G_aa.csv", "G_ab.csv", "G_bb.csv", "tool_tip.csv"},
+}
+# Cheap enough to run for real (a second or less each, no library holder needed).
+RUN = {"model", "toolpoint", "lobes", "spectrum", "examples"}
+FENCE = re.compile(r"^```[^\n]*\n(.*?)^```", flags=re.S | re.M)
+
+
+def documented_commands(page: Path) -> list[list[str]]:
+    """The ``taptune …`` command lines of the page's code blocks, as argument lists
+    (continuation lines joined, comments dropped); output lines such as
+    ``taptune model: my.toml: …`` are not commands."""
+    import shlex
+
+    from taptune.cli import COMMANDS
+
+    commands = []
+    for block in FENCE.findall(page.read_text(encoding="utf-8")):
+        for line in block.replace("\\\n", " ").splitlines():
+            words = shlex.split(line.strip().removeprefix("$ "), comments=True) if line.strip().startswith(("taptune ", "$ taptune ")) else []
+            if len(words) > 1 and words[1] in COMMANDS:
+                commands.append(words[1:])
+    return commands
+
+
+def _parse(argv: list[str]):
+    import contextlib
+    import io
+
+    from taptune.cli import _build_parser
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        try:
+            return _build_parser(argv[0]).parse_args(argv)
+        except SystemExit:
+            raise AssertionError(f"taptune {' '.join(argv)}: {err.getvalue().strip()}") from None
+
+
+def _values(args, dests) -> list[str]:
+    out = []
+    for dest in dests:
+        value = getattr(args, dest, None)
+        out += [value] if isinstance(value, str) else [v for v in value or [] if isinstance(v, str)]
+    return out
+
+
+DOC_COMMANDS = [(page, argv) for page in PAGES if page.name != "cli.md" for argv in documented_commands(page)]
+
+
+def test_the_documented_commands_are_found():
+    pages = {page.name for page, _ in DOC_COMMANDS}
+    assert {"README.md", "tap-test.md", "library.md", "machine.md"} <= pages
+    assert len(DOC_COMMANDS) >= 15
+    assert ["model", "my.toml:"] not in [argv[:2] for _, argv in DOC_COMMANDS]  # an error message, not a command
+
+
+@pytest.mark.parametrize("page", sorted({p for p, _ in DOC_COMMANDS}), ids=lambda p: p.name)
+def test_every_documented_command_parses_and_names_files_that_exist(page):
+    """Run from the clone (or from the folder 'taptune examples' fills), a command reads
+    only files that ship, files an earlier command of the page wrote, or files the page
+    tells the user to make."""
+    text_outside_code = FENCE.sub("", page.read_text(encoding="utf-8"))
+    mine = USER_FILES.get(page.name, set())
+    written = set()
+    for argv in (a for p, a in DOC_COMMANDS if p == page):
+        args = _parse(argv)
+        for path in _values(args, READS):
+            if path in mine:
+                assert f"`{path}`" in text_outside_code, f"{page.name}: say in the text what {path} is"
+                continue
+            assert (REPO / path).exists() or path in written, (
+                f"{page.name}: taptune {' '.join(argv)}: {path} does not ship and nothing before makes it")
+        written |= set(_values(args, WRITES))
+
+
+def _runnable():
+    """(page, argv) of the cheap commands whose inputs ship, each command once."""
+    seen = {}
+    for page, argv in DOC_COMMANDS:
+        if argv[0] in RUN and all((REPO / f).exists() for f in _values(_parse(argv), READS)):
+            seen.setdefault(tuple(argv), page)
+    return [(page, list(argv)) for argv, page in seen.items()]
+
+
+@pytest.mark.parametrize("page, argv", _runnable(), ids=lambda v: v.name if isinstance(v, Path) else " ".join(v[:2]))
+def test_the_cheap_documented_commands_run_as_written(page, argv, tmp_path, monkeypatch, capsys):
+    from taptune.cli import main
+
+    for name in ("assets", "recordings"):  # the clone's folders, the outputs in a temporary one
+        (tmp_path / name).symlink_to(REPO / name)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("TAPTUNE_LIBRARY", str(tmp_path / "holders.json"))
+    code = main(argv)
+    assert code == 0, f"{page.name}: taptune {' '.join(argv)}: {capsys.readouterr().err}"
