@@ -1,7 +1,7 @@
 """Machine view: time of one stick-out slider move — tool-point FRF + lobes + redraw.
 
 The Machine view (offscreen Qt) with the example machine (recordings/machine), holder A
-of MODEL.md §13.4 and the reference tool, the default cut (4 teeth, Ø16, ae 4 mm down,
+of the reference assembly (assets/er32_hsk63_d16.toml) and its tool, the default cut (4 teeth, Ø16, ae 4 mm down,
 al7075, 2,000–24,000 rpm). Each move to a stick-out from 45 to 65 mm is timed in its three
 parts on the GUI thread, as the worker and the view run them one after the other:
 ``compute_machine`` (toolpoint_frf and stability_lobes), then ``draw`` and the event
@@ -49,7 +49,7 @@ def main() -> None:
     view.load_machine(str(REPO / "recordings" / "machine" / "machine.toml"), remember=False)
     assembly = load_assembly(REPO / "recordings" / "er32_d16.toml")
     holder_a = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.0)
-    source = PredictorSource("holder A (MODEL.md §13.4)", (holder_a,), assembly)
+    source = PredictorSource("holder A (the published ER32 holder)", (holder_a,), assembly)
     view.set_source(source)
     view.shutdown()  # the timed moves run here, one after the other, not in the worker
     cut = view.cut()

@@ -1,7 +1,7 @@
 """Speed and accuracy of the machine stage, one core.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_machine.py [--repeat N]``.
-On the reference assembly (MODEL.md §13.4, holder A) on a synthetic spindle prints
+On the reference assembly (assets/er32_hsk63_d16.toml, the published holder A) on a synthetic spindle prints
 CPU seconds (``time.process_time``, medians of ``--repeat`` runs after one warm-up
 that pays the imports):
 

@@ -1,7 +1,7 @@
 """Speed of the fast reduced evaluator against the full converged model, one core.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_model.py [--repeat N] [--count N]``.
-On the reference assembly (assets/er32_hsk63_d16.toml, MODEL.md §13.4) prints:
+On the reference assembly (assets/er32_hsk63_d16.toml) prints:
 
 * the build time of :class:`~taptune.model.reduced.FastEvaluator` (full model included);
 * ``N evaluations/s`` of what the optimiser needs per candidate (f1–f3, ζ1–ζ3 and the

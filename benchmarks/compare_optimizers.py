@@ -1,6 +1,6 @@
 """How far is taptune's GA from strong references, per evaluation, on real identification problems?
 
-Each method gets the same objective (MODEL.md §8.4, reduced evaluator), the same
+Each method gets the same objective (docs/physics.md §4, reduced evaluator), the same
 least-squares polish and the same near-optimal set (archive members plus the extreme pushes of
 :mod:`taptune.identify.uncertainty`), so only the global stage differs:
 

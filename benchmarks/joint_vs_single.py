@@ -1,10 +1,10 @@
 """How much does a joint fit of several recordings narrow the prediction at a new stick-out?
 
-One holder (recordings/er32_d16: the reference assembly of MODEL.md §13.4 with known
+One holder (recordings/er32_d16: the reference assembly, assets/er32_hsk63_d16.toml, with known
 true parameters), synthetic tap recordings at two or three stick-outs (model + workshop
 nuisances, :mod:`taptune.synthetic`). Each recording is identified alone, then all of
 them jointly; every result predicts f1–f3 at a stick-out none of them was recorded at.
-The table gives the prediction, its ± spread (near-optimal set, MODEL.md §8.6) and
+The table gives the prediction, its ± spread (near-optimal set, docs/physics.md §5) and
 the error against the truth, per mode.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/joint_vs_single.py [--recorded 48.5 58.5] [--target 68.5]

@@ -11,7 +11,7 @@ import numpy as np
 
 from taptune.signal.synth import Nuisances, synthesize_recording, tap_grid
 
-# Local modes of an HSK-A63 interface (MODEL.md §8.3): near 9.7 and 10.2 kHz, often
+# Local modes of an HSK-A63 interface (docs/tap-test.md): near 9.7 and 10.2 kHz, often
 # louder than the bending peaks. (f_hz, zeta, peak relative to the loudest bending peak)
 HSK_A63_LOCAL_MODES = ((9700.0, 0.0015, 1.5), (10200.0, 0.0018, 0.8))
 

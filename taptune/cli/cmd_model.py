@@ -1,8 +1,8 @@
 """``taptune model ASSEMBLY [--holder NAME | --params JSON_FILE] [--library PATH] [--json OUT]``.
 
-Free-free model of one assembly with the nominal holder parameters (MODEL.md §8.1), a
+Free-free model of one assembly with the nominal holder parameters (docs/physics.md §2), a
 library holder's, or those in a JSON file: bending frequencies, damping ratios, model
-size, the physical bounds of §7.6 and the mode diagnostics.
+size, the physical bounds of the bending frequencies over the search space and the mode diagnostics.
 """
 
 from __future__ import annotations

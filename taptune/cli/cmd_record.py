@@ -64,7 +64,7 @@ def run(args) -> int:
         device = recording.find_input_device(args.device)
     except DeviceError as err:
         # No audio library or no device is a problem with the user's set-up, like a bad
-        # file: one line and exit 2 (CLI-CONTRACT.md).
+        # file: one line and exit 2 (docs/cli.md).
         print(f"taptune record: {err}", file=sys.stderr)
         return 2
     try:

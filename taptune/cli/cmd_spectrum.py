@@ -1,4 +1,4 @@
-"""``taptune spectrum WAV [--assembly FILE] [--json OUT] [--plot PNG]`` (CLI-CONTRACT.md)."""
+"""``taptune spectrum WAV [--assembly FILE] [--json OUT] [--plot PNG]`` (docs/cli.md)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Assembly files (TOML, mm at the boundary) and the SI geometry they describe.
 
-An assembly is one tool clamped in one holder at one stick-out (ASSEMBLY-FORMAT.md).
+An assembly is one tool clamped in one holder at one stick-out (docs/assembly-format.md).
 :func:`load_assembly` parses and validates a file; every malformed or impossible file
 raises :class:`~taptune.errors.InputError` naming the file, the key and the problem.
 Inside, everything is SI (m, Pa, kg/m³); :func:`assembly_to_toml` writes mm again.
@@ -64,7 +64,7 @@ class Holder:
     """Tool holder: segments from the spindle-side end (z = 0) to the front face.
 
     ``gauge_length`` [m] (optional) is the distance from the front face back to the
-    coupling plane where the holder meets the spindle (MACHINE.md); ``None`` lets the
+    coupling plane where the holder meets the spindle (docs/machine.md); ``None`` lets the
     interface decide (:func:`taptune.machine.coupling_plane`).
     """
 
@@ -210,7 +210,7 @@ def _check_material(m: Material, key: str, fail) -> None:
         fail(f"{key}.youngs_modulus", f"must lie in {lo / GPA:g}…{hi / GPA:g} GPa (steel 210, carbide 580; "
              f"in GPa, not Pa), got {m.youngs_modulus / GPA:g}")
     # Holder steels and carbide lie near 0.2-0.3; negative ratios (auxetic foams) are no
-    # tool material, and near -1 they break the shear coefficient of MODEL.md §3.2.
+    # tool material, and near -1 they break the shear coefficient of docs/physics.md §1.
     if not (0.0 <= m.poisson < 0.5):
         fail(f"{key}.poisson", f"must lie in [0, 0.5), got {m.poisson:g}")
     if not (0 <= m.loss_factor < 1):
@@ -266,7 +266,7 @@ def validate_holder(h: Holder, src: str) -> Holder:
 
 
 def validate(asm: Assembly) -> Assembly:
-    """Check the geometry rules of ASSEMBLY-FORMAT.md / MODEL.md §1.3.
+    """Check the geometry rules of docs/assembly-format.md (where things are).
 
     Returns the assembly with its ``warnings`` filled in; raises InputError on an
     impossible geometry.
@@ -486,7 +486,7 @@ def parse_assembly(data: dict, source: str = "<assembly>") -> Assembly:
                              tolerances=_tolerances(r, h, t, s), file_warnings=_unknown_keys(r, data)))
 
 
-# The keys of ASSEMBLY-FORMAT.md (and the optional tolerances); anything else is ignored
+# The keys of docs/assembly-format.md (and the optional tolerances); anything else is ignored
 # with a warning, so a misspelt optional key (``gauge_lenght``) is not silently lost.
 _MATERIAL_KEYS = ("density", "youngs_modulus", "poisson", "loss_factor")
 _SEGMENT_KEYS = ("length", "od", "id")
@@ -501,7 +501,7 @@ _KNOWN_KEYS = {
 def _unknown_keys(r: "_Reader", data: dict) -> tuple[str, ...]:
     """One warning per key the format does not know, with the known key it resembles.
 
-    Extra top-level sections are welcome (ASSEMBLY-FORMAT.md) unless they look like a
+    Extra top-level sections are welcome (docs/assembly-format.md) unless they look like a
     misspelt ``[holder]``, ``[tool]`` or ``[setup]``.
     """
     out: list[str] = []
@@ -557,7 +557,7 @@ def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
 
 
 def load_assembly(path: str | Path) -> Assembly:
-    """Read and validate an assembly TOML file (ASSEMBLY-FORMAT.md)."""
+    """Read and validate an assembly TOML file (docs/assembly-format.md)."""
     return assembly_from_toml(read_text(path, "an assembly file", "TOML"), str(path))
 
 
@@ -565,7 +565,7 @@ def parse_holder(data: dict, source: str = "<holder>") -> Holder:
     """A validated :class:`Holder` from TOML data holding a ``[holder]`` table (mm, GPa).
 
     Other tables (``[tool]``, ``[setup]``) are ignored: a holder-only file describes, for
-    example, the dummy holder of an inverse-RCSA spindle measurement (MACHINE.md).
+    example, the dummy holder of an inverse-RCSA spindle measurement (docs/machine.md).
     """
     r = _Reader(source)
     if not isinstance(data, dict):
@@ -574,7 +574,7 @@ def parse_holder(data: dict, source: str = "<holder>") -> Holder:
 
 
 def load_holder(path: str | Path) -> Holder:
-    """Read and validate a holder-only TOML file (the ``[holder]`` table of ASSEMBLY-FORMAT.md)."""
+    """Read and validate a holder-only TOML file (the ``[holder]`` table of docs/assembly-format.md)."""
     return parse_holder(_loads(read_text(path, "a holder file", "TOML"), str(path)), str(path))
 
 

@@ -24,9 +24,9 @@ from taptune.errors import InputError
 
 # Below this rate not even the first bending mode of a stiff assembly is safely inside
 # the band (Nyquist 4 kHz); the analysis warns separately when the expected third mode
-# exceeds 0.9 x Nyquist (MODEL.md §8.3).
+# exceeds 0.9 x Nyquist (docs/tap-test.md).
 MIN_SAMPLE_RATE = 8000
-#: The rate a tap analysis needs (MODEL.md §8.3: ≥ 44.1 kHz recommended): the bending
+#: The rate a tap analysis needs (docs/tap-test.md: 44.1 kHz or more): the bending
 #: modes ring at 3–20 kHz, so below it the spectrum (ending at half the rate) misses some.
 RECOMMENDED_SAMPLE_RATE = 44100
 #: Longest recording read [s]: a tap test needs a few seconds per tap, and the analysis

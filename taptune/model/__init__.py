@@ -1,4 +1,4 @@
-"""Free-free Timoshenko model of a tool in a holder (MODEL.md §1–§7).
+"""Free-free Timoshenko model of a tool in a holder (docs/physics.md §1, §3).
 
 geometry → mesh → elements → contact → assembly (fe) → modes (eigen) → receptance
 (modes). The public entry points are re-exported here; submodules are imported on first use of a name so

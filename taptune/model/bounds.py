@@ -1,4 +1,4 @@
-"""Physical bounds of the bending frequencies over the search space (MODEL.md §7.6).
+"""Physical bounds of the bending frequencies over the search space (docs/physics.md §3).
 
 They help label measured peaks: a peak outside [lower, upper] of mode n cannot be bending
 mode n of this assembly for any admissible holder. Eigenvalues grow monotonically with
@@ -42,7 +42,7 @@ def soft_corner_params() -> list[HolderParams]:
 
 
 def bending_bounds(assembly: Assembly, options: ModelOptions = ModelOptions(), fe=None) -> np.ndarray:
-    """Lowest and highest reachable frequency of bending modes 1–3 [Hz] (MODEL.md §7.6).
+    """Lowest and highest reachable frequency of bending modes 1–3 [Hz] (docs/physics.md §3).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Consistent matrices of the distributed tool–holder contact layer (MODEL.md §5).
+"""Consistent matrices of the distributed tool–holder contact layer (docs/physics.md §1).
 
 The layer's strain energy is ½∫ k_t(z) (w_t − w_h)² + k_r(z) (θ_t − θ_h)² dz with line
 densities k(z) = c · (1 + a ξ(z)), ξ = 2 (z − z_c0)/L_c − 1, a = α/100. The parameters
@@ -43,7 +43,7 @@ class ContactBlocks:
 
 
 def contact_blocks(z_a, length, phi_holder, phi_tool, zone) -> ContactBlocks:
-    """Consistent contact blocks for coincident element pairs (MODEL.md §5.3).
+    """Consistent contact blocks for coincident element pairs (docs/physics.md §1).
 
     Parameters
     ----------

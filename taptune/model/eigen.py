@@ -1,4 +1,4 @@
-"""The eigen-solution of an assembled free-free model: complex modes (MODEL.md §7.1–7.2).
+"""The eigen-solution of an assembled free-free model: complex modes (docs/physics.md §3).
 
 Eigenvalues are λ_r = ω_r² (1 + i η_r); f_r = sqrt(Re λ_r)/2π, ζ_r = η_r/2. Vectors are
 normalised with the unconjugated transpose, φᵀ M φ = 1, so that the modes of the complex
@@ -82,7 +82,7 @@ def rigid_body_modes(fe, M) -> np.ndarray:
 
 
 def check_rigid_pair(lam_sorted) -> None:
-    """MODEL.md §7.2: exactly two (near-)zero eigenvalues, else the model is disconnected."""
+    """docs/physics.md §3: exactly two (near-)zero eigenvalues, else the model is disconnected."""
     f = _frequency_hz(lam_sorted)
     if len(f) < 3:
         raise ModelError("the model has fewer than three modes; it cannot be a holder with a tool")
@@ -183,7 +183,7 @@ def _eigen(fe, params: HolderParams, k: int, sigma: float = SIGMA) -> _Eigen:
 def elastic_solution(fe, params: HolderParams, n_modes: int | None):
     """Solve, check the rigid pair, return (eigen, elastic λ, elastic normalised φ, M)."""
     # The rigid-body pair plus the wanted modes; the first elastic one shows whether a
-    # third near-zero mode exists (§7.2).
+    # third near-zero mode exists (a free body has exactly two).
     k = fe.n_dofs if n_modes is None else min(fe.n_dofs, n_modes + 2)
     eig = _eigen(fe, params, k)
     check_rigid_pair(eig.lam)
@@ -193,7 +193,7 @@ def elastic_solution(fe, params: HolderParams, n_modes: int | None):
 
 
 def solve_modes(fe, params: HolderParams, n_modes: int = 5) -> Modes:
-    """The lowest elastic modes of the free-free model (MODEL.md §7.1–7.2).
+    """The lowest elastic modes of the free-free model (docs/physics.md §3).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Two-node Timoshenko beam elements (MODEL.md §3), vectorised over elements.
+"""Two-node Timoshenko beam elements (docs/physics.md §1), vectorised over elements.
 
 Element DOF order is [w1, θ1, w2, θ2] (node 1 at the smaller z). Every function takes
 arrays of element properties of shape (n,) and returns stacks of shape (n, 4, 4) (or
@@ -30,7 +30,7 @@ def section_properties(od, id_):
 
 
 def shear_coefficient(od, id_, poisson, formula="hutchinson"):
-    """Shear coefficient κ of a hollow circular section (MODEL.md §3.2).
+    """Shear coefficient κ of a hollow circular section (docs/physics.md §1).
 
     Parameters
     ----------
@@ -61,7 +61,7 @@ def shear_coefficient(od, id_, poisson, formula="hutchinson"):
 
 
 def shear_parameter(length, area, inertia, kappa, poisson):
-    """Shear deformation parameter φ = 24 (1 + ν) I / (κ A l²) (MODEL.md §3.3), shape (n,).
+    """Shear deformation parameter φ = 24 (1 + ν) I / (κ A l²) (docs/physics.md §1), shape (n,).
 
     φ does not depend on E because G is proportional to E; φ = 0 is Euler–Bernoulli.
     """
@@ -70,7 +70,7 @@ def shear_parameter(length, area, inertia, kappa, poisson):
 
 
 def stiffness_matrices(E, inertia, length, phi):
-    """Real element stiffness matrices K_e [N/m, N, N·m] (MODEL.md §3.4), shape (n, 4, 4).
+    """Real element stiffness matrices K_e [N/m, N, N·m] (docs/physics.md §1), shape (n, 4, 4).
 
     Multiply by (1 + i η_mat) for the complex (hysteretic) stiffness.
     """
@@ -88,7 +88,7 @@ def stiffness_matrices(E, inertia, length, phi):
 
 
 def consistent_mass_matrices(rho, area, inertia, length, phi):
-    """Friedman–Kosmatka consistent mass M_A + M_I [kg, kg·m, kg·m²] (MODEL.md §3.5), (n, 4, 4)."""
+    """Friedman–Kosmatka consistent mass M_A + M_I [kg, kg·m, kg·m²] (docs/physics.md §1), (n, 4, 4)."""
     l = np.asarray(length, dtype=float)
     phi = np.asarray(phi, dtype=float)
     rho = np.asarray(rho, dtype=float)
@@ -123,7 +123,7 @@ def consistent_mass_matrices(rho, area, inertia, length, phi):
 def core_mass_matrices(rho, area, inertia, length):
     """The core method's mass: Hermite translational + linear-rotation rotary inertia, (n, 4, 4).
 
-    MODEL.md §3.5, option ``mass="core"``.
+    docs/physics.md §1, option ``mass="core"``.
     """
     l = np.asarray(length, dtype=float)
     rho = np.asarray(rho, dtype=float)
@@ -142,7 +142,7 @@ def core_mass_matrices(rho, area, inertia, length):
 
 
 def shape_functions(xi, length, phi):
-    """Interdependent Timoshenko interpolation N_w, N_θ (MODEL.md §3.6).
+    """Interdependent Timoshenko interpolation N_w, N_θ (docs/physics.md §1).
 
     Parameters
     ----------
@@ -235,7 +235,7 @@ class BeamElements:
         return (1 + 1j * self.loss_factor) * k
 
     def M(self, variant: str = "consistent") -> np.ndarray:
-        """Real element mass matrices, shape (n, 4, 4); ``variant`` per MODEL.md §3.5."""
+        """Real element mass matrices, shape (n, 4, 4); ``variant`` per docs/physics.md §1."""
         area, inertia = self.sections()
         if variant == "consistent":
             return consistent_mass_matrices(self.density, area, inertia, self.length, self.phi())

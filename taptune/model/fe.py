@@ -1,4 +1,4 @@
-"""The assembled free-free finite-element model (MODEL.md §4–§6).
+"""The assembled free-free finite-element model (docs/physics.md §1).
 
 :func:`build_model` turns an assembly into an :class:`FEModel` holding the
 parameter-free affine pieces
@@ -7,7 +7,7 @@ parameter-free affine pieces
     M = M_tool + density_factor·M_holder,      a = alpha / 100,
 
 so that any holder parameter set costs two sparse additions (:meth:`FEModel.matrices`).
-Global DOF order (MODEL.md §0.2): holder nodes in increasing z, then tool nodes, [w, θ]
+Global DOF order: holder nodes in increasing z, then tool nodes, [w, θ]
 per node; the tool-tip w DOF is the second-to-last.
 """
 
@@ -159,7 +159,7 @@ class FEModel:
     M_tool, M_holder : scipy.sparse.csr_matrix, real
         Body mass; M_holder at nominal holder density.
     T0, T1, R0, R1 : scipy.sparse.csr_matrix, real
-        Contact layer per unit line stiffness (MODEL.md §5.3); T1, R1 carry ξ(z).
+        Contact layer per unit line stiffness (docs/physics.md §1); T1, R1 carry ξ(z).
     z_holder, z_tool : ndarray
         Node positions of each body [m] (for the rigid-contact variant, the tool nodes
         not tied to the holder).
@@ -205,7 +205,7 @@ class FEModel:
 
     @property
     def rigid_vectors(self) -> tuple[np.ndarray, np.ndarray]:
-        """(t, r): rigid translation and rotation, shape (n_dofs,) each (MODEL.md §6)."""
+        """(t, r): rigid translation and rotation, shape (n_dofs,) each (docs/physics.md §1)."""
         return rigid_body_vectors(self.z_nodes)
 
     @property
@@ -261,7 +261,7 @@ class FEModel:
 
 
 def build_model(assembly: Assembly, options: ModelOptions = ModelOptions(), f_max_hz: float | None = None) -> FEModel:
-    """Mesh an assembly and assemble the parameter-free model pieces (MODEL.md §2–§6).
+    """Mesh an assembly and assemble the parameter-free model pieces (docs/physics.md §1).
 
     Parameters
     ----------
@@ -309,7 +309,7 @@ def mesh_frequency_hz(assembly: Assembly, options: ModelOptions = ModelOptions()
 
 
 def stiffest_holder() -> HolderParams:
-    """Holder factors of the stiffest, lightest holder of the search space (MODEL.md §8.1).
+    """Holder factors of the stiffest, lightest holder of the search space (docs/physics.md §2).
 
     The contact values are the stiffest too; with tied contact they do not matter.
     """
@@ -320,7 +320,7 @@ def stiffest_holder() -> HolderParams:
 
 
 def highest_bending_hz(fe: "FEModel", mode: int = 3) -> float:
-    """Upper bound of bending mode ``mode`` over the search space [Hz] (MODEL.md §7.6)."""
+    """Upper bound of bending mode ``mode`` over the search space [Hz] (docs/physics.md §3)."""
     return float(solve_modes(rigid_contact_model(fe), stiffest_holder(), mode).frequency_hz[mode - 1])
 
 
@@ -379,7 +379,7 @@ def tie_matrix(fe: FEModel) -> sp.csr_matrix:
 
 
 def rigid_contact_model(fe: FEModel) -> FEModel:
-    """The variant with tool and holder DOFs tied in the contact zone (MODEL.md §7.6, §13.4).
+    """The variant with tool and holder DOFs tied in the contact zone (docs/physics.md §3; the rigid-contact limit of the reference assembly).
 
     The contact matrices are zero in it (a tied layer is not strained); holder factors
     still apply through :meth:`FEModel.matrices`, the contact parameters do nothing.

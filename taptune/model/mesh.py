@@ -1,10 +1,10 @@
-"""Meshing of holder and tool (MODEL.md §2) with grading toward the contact-zone ends (§5.3).
+"""Meshing of holder and tool with grading toward the contact-zone ends (docs/physics.md §1).
 
-Breakpoints follow the binding rules of MODEL.md §2, so holder and tool have nodes at
-exactly the same z inside the contact zone. On top of them, grading points are placed
+Breakpoints are every segment end of both bodies and the contact-zone ends, so holder
+and tool have nodes at exactly the same z inside the contact zone. On top of them, grading points are placed
 around both ends of the contact zone (short elements growing geometrically away from
 each end): the stiff contact layer loads both beams in a boundary layer a few mm long
-there, and uniform meshes would need ≈1 mm elements everywhere to converge (§5.3). The
+there, and uniform meshes would need ≈1 mm elements everywhere to converge. The
 first element follows the shortest boundary layer of the search space (slender tools
 need it shorter), and every element resolves the bending wavelength at the highest
 reachable third bending frequency (stubby sections). Sizes: see ``ModelOptions``.
@@ -23,7 +23,7 @@ from taptune.model.options import ModelOptions
 from taptune.model.params import P_UPPER
 
 MM = 1e-3
-# Breakpoints closer than this are one (MODEL.md §2 rule 3: 1e-6 mm) [m].
+# Breakpoints closer than this (1e-6 mm) are one [m].
 MERGE_TOL = 1e-9
 
 
@@ -100,7 +100,7 @@ def grading_points(z_end, direction, limit, h_min, growth, h_cap, drop_near=()):
 
 
 def subdivide(breakpoints, cap_of) -> np.ndarray:
-    """Nodes: every interval split into equal elements no longer than its cap (§2 rule 3) [m].
+    """Nodes: every interval split into equal elements no longer than its cap [m].
 
     Parameters
     ----------
@@ -132,7 +132,7 @@ def boundary_layer_length(assembly: Assembly, shear: str = "hutchinson") -> floa
 
     A layer of line stiffness c loads a beam over a length of about sqrt(κGA/c) (shear,
     translational layer) or sqrt(EI/c) (bending, rotational layer). With the stiffest
-    layer of the search space (MODEL.md §8.1) this is a few mm for a Ø16 tool but well
+    layer of the search space (docs/physics.md §2) this is a few mm for a Ø16 tool but well
     under 1 mm for slender tools, so the first zone elements must follow it.
     """
     c_t = 10.0 ** P_UPPER[0] * 1e3  # N/m per m of contact
@@ -189,7 +189,7 @@ def _cap_at(z, bounds, caps) -> np.ndarray:
 
 
 def _body(z, start, segments, material, shear) -> BeamElements:
-    """Elements on nodes z, properties from the segment containing each mid-point (§2 rule 4)."""
+    """Elements on nodes z, properties from the segment containing each mid-point."""
     bounds = segment_bounds(start, segments)
     mid = 0.5 * (z[:-1] + z[1:])
     idx = np.clip(np.searchsorted(bounds, mid) - 1, 0, len(segments) - 1)
@@ -208,7 +208,7 @@ def _body(z, start, segments, material, shear) -> BeamElements:
 
 
 def build_mesh(assembly: Assembly, options: ModelOptions = ModelOptions(), f_max_hz: float | None = None) -> Mesh:
-    """Mesh holder and tool of an assembly (MODEL.md §2 plus contact-end grading).
+    """Mesh holder and tool of an assembly (docs/physics.md §1 plus contact-end grading).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Receptances, mode shapes and diagnostics of the free-free model (MODEL.md §7.3–7.6).
+"""Receptances, mode shapes and diagnostics of the free-free model (docs/physics.md §3).
 
 The modes themselves come from :mod:`taptune.model.eigen`. Receptances use the exact
 rigid-body vectors, the computed elastic modes and the residual of all higher modes to
@@ -37,7 +37,7 @@ def _omega2(freq_hz) -> np.ndarray:
 
 
 def modal_receptance(lam, phi_i, phi_j, rigid_i, rigid_j, freq_hz, residual=(0.0, 0.0), sigma=SIGMA) -> np.ndarray:
-    """Receptance by modal superposition (MODEL.md §7.3) [m/N for w/f].
+    """Receptance by modal superposition (docs/physics.md §3) [m/N for w/f].
 
     Parameters
     ----------
@@ -62,7 +62,7 @@ def modal_receptance(lam, phi_i, phi_j, rigid_i, rigid_j, freq_hz, residual=(0.0
 
 
 def direct_receptance(K, M, i: int, j: int, freq_hz) -> np.ndarray:
-    """Receptance H_ij by solving (K̃ − ω² M) x = e_j per frequency (MODEL.md §7.4), shape (m,)."""
+    """Receptance H_ij by solving (K̃ − ω² M) x = e_j per frequency (docs/physics.md §3), shape (m,)."""
     w2 = _omega2(freq_hz)
     e = np.zeros(K.shape[0], dtype=complex)
     e[j] = 1.0
@@ -75,7 +75,7 @@ def direct_receptance(K, M, i: int, j: int, freq_hz) -> np.ndarray:
 
 
 def tip_receptance(fe: FEModel, params: HolderParams, freq_hz, method: str = "modal", n_modes: int | None = 12):
-    """Tool-tip direct receptance H_tt(f) [m/N] (MODEL.md §7.3–7.4).
+    """Tool-tip direct receptance H_tt(f) [m/N] (docs/physics.md §3).
 
     Parameters
     ----------
@@ -121,7 +121,7 @@ def tip_receptance(fe: FEModel, params: HolderParams, freq_hz, method: str = "mo
 
 
 def mode_shapes(fe: FEModel, modes: Modes):
-    """Translational mode shapes of each body for plotting (MODEL.md §12).
+    """Translational mode shapes of each body for plotting.
 
     Returns
     -------
@@ -143,7 +143,7 @@ def mode_shapes(fe: FEModel, modes: Modes):
 
 @dataclass(frozen=True)
 class ModeDiagnostics:
-    """Per-mode indicators of MODEL.md §7.6, shape (n,) each.
+    """Per-mode indicators of docs/physics.md §3, shape (n,) each.
 
     ``tip_participation``: |φ_tip|² relative to the largest among the first three modes;
     ``contact_energy_share``: contact-layer share of the mode's strain energy
@@ -171,7 +171,7 @@ class ModeDiagnostics:
 
 
 def mode_diagnostics(fe: FEModel, params: HolderParams, modes: Modes) -> ModeDiagnostics:
-    """Tip participation and contact strain-energy share of each mode (MODEL.md §7.6)."""
+    """Tip participation and contact strain-energy share of each mode (docs/physics.md §3)."""
     phi = modes.vectors
     tip = np.abs(phi[fe.tip_dof]) ** 2
     ref = np.max(tip[:3]) if len(tip) else 1.0
@@ -197,7 +197,7 @@ class ModelResult:
         Size of the model.
     params : HolderParams
     tip_participation, contact_energy_share : tuple of float
-        Diagnostics of MODEL.md §7.6 per mode.
+        Diagnostics of docs/physics.md §3 per mode.
     warnings : tuple of str
         Assembly warnings and mode diagnostics.
     options : dict
@@ -237,7 +237,7 @@ def analyse(assembly, params: HolderParams | None = None, options=None, n_modes:
     assembly : Assembly
         Validated geometry.
     params : HolderParams, optional
-        Holder parameters; the nominal set of MODEL.md §8.1 when omitted.
+        Holder parameters; the nominal set of docs/physics.md §2 when omitted.
     options : ModelOptions, optional
     n_modes : int
         Elastic modes to report.

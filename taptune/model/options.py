@@ -1,8 +1,8 @@
-"""Discretisation options of the free-free model (MODEL.md §2, §3.2, §3.5, §5.3).
+"""Discretisation options of the free-free model (docs/physics.md §1).
 
-The defaults meet the binding convergence requirement of MODEL.md §5.3: halving every
+The defaults give a converged model (docs/physics.md §1): halving every
 element changes f1–f3 by less than 0.05 % and ζ1 by less than 1 %. They are finer than
-the mesh MODEL.md §5.3 recommends (0.25 mm growing ×1.3 to 1.5 mm): that one passes the
+the mesh first chosen (0.25 mm growing ×1.3 to 1.5 mm): that one passes the
 bundled and development assemblies with ≈20 % margin but failed on random assemblies
 with short contact zones or slender tools at corners of the search space (worst change
 0.13 %). With these defaults the worst change over 42 random assemblies × 5 hard
@@ -43,9 +43,9 @@ class ModelOptions:
         reachable third bending frequency divided by this (0 switches it off); it only
         bites in stubby assemblies with high third modes.
     shear : {"hutchinson", "cowper"}
-        Shear-coefficient formula for hollow circular sections (MODEL.md §3.2).
+        Shear-coefficient formula for hollow circular sections (docs/physics.md §1).
     mass : {"consistent", "core"}
-        Element mass matrix (MODEL.md §3.5).
+        Element mass matrix (docs/physics.md §1).
     mesh_scale : float
         1 for the default mesh. A value s < 1 splits every element of the default
         mesh into ``ceil(1/s)`` equal parts (0.5 halves every element, which is how the

@@ -1,8 +1,8 @@
-"""The seven holder parameters of the distributed tool–holder contact (MODEL.md §5, §8.1).
+"""The seven holder parameters of the distributed tool–holder contact (docs/physics.md §1, §2).
 
 Units are those of the holder library ("per mm of contact"): ``k_tt`` [N/m per mm],
 ``k_rr`` [N·m/rad per mm], ``eta_tt``/``eta_rr`` [1/mm], ``alpha`` [%], the two factors
-dimensionless. The optimiser works on the vector p of §8.1 (log10 for the four
+dimensionless. The optimiser works on the vector p (log10 for the four
 intensities), see :func:`to_p` and :func:`from_p`.
 """
 
@@ -14,11 +14,11 @@ import numpy as np
 
 from taptune.errors import InputError
 
-# The fixed reference length that turns an eta [1/mm] into a loss factor (MODEL.md §5.2).
+# The fixed reference length that turns an eta [1/mm] into a loss factor (docs/physics.md §1).
 ETA_REFERENCE_MM = 10.0
 
 NAMES = ("k_tt", "k_rr", "eta_tt", "eta_rr", "alpha", "density_factor", "modulus_factor")
-# Bounds of p (MODEL.md §8.1, binding). The first four are log10 of the parameter.
+# Bounds of p (docs/physics.md §2, binding). The first four are log10 of the parameter.
 P_LOWER = np.array([4.0, 2.0, -7.0, -7.0, -25.0, 0.95, 0.90])
 P_UPPER = np.array([10.0, 5.0, -1.0, -1.0, 25.0, 1.05, 1.10])
 LOG_PARAMS = 4
@@ -71,7 +71,7 @@ class HolderParams:
                 raise InputError(f"{source}: parameter {k} must be >= 0, got {values[k]:g}")
         if abs(values["alpha"]) >= 100:
             raise InputError(f"{source}: parameter alpha must lie in (-100, 100) %, got {values['alpha']:g}")
-        # Two decades beyond the search space (MODEL.md §8.1) is still a holder; far beyond
+        # Two decades beyond the search space (docs/physics.md §2) is still a holder; far beyond
         # it the matrices overflow or lose all precision.
         for k, lo, hi in (("k_tt", 1e2, 1e12), ("k_rr", 1.0, 1e7), ("eta_tt", 0.0, 1.0), ("eta_rr", 0.0, 1.0),
                           ("density_factor", 0.1, 10.0), ("modulus_factor", 0.1, 10.0)):
@@ -80,7 +80,7 @@ class HolderParams:
         return cls(**values)
 
 
-# Medians of five published holders (MODEL.md §8.1), used when nothing else is known.
+# Medians of five published holders (docs/physics.md §2), used when nothing else is known.
 NOMINAL = HolderParams(k_tt=2.81e9, k_rr=1.51e4, eta_tt=4.57e-3, eta_rr=6.19e-3)
 
 

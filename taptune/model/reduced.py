@@ -1,7 +1,7 @@
-"""Fast reduced evaluator of the holder–tool model for the optimiser (MODEL.md §7.5).
+"""Fast reduced evaluator of the holder–tool model for the optimiser (docs/physics.md §4).
 
 The optimiser needs f1–f3, ζ1 and the tool-tip receptance on a 201-point window for
-thousands of parameter vectors p (MODEL.md §8.1) per identification. The full model
+thousands of parameter vectors p (docs/physics.md §2) per identification. The full model
 (``build_model`` + ``solve_modes``) costs milliseconds per p; this module builds, once
 per assembly, a small Galerkin model that reproduces it and answers in a fraction of
 that.
@@ -61,7 +61,8 @@ _K_PIECES = ("K_tool", "K_holder", "T0", "T1", "R0", "R1")
 
 @dataclass(frozen=True)
 class ReductionOptions:
-    """How the reduced model is built and solved (defaults measured to meet MODEL.md §7.5).
+    """How the reduced model is built and solved (docs/physics.md §4; the defaults are measured
+    to keep f1–f3 and ζ1 within the tolerances below).
 
     Parameters
     ----------
@@ -148,7 +149,7 @@ class BatchEvaluation:
 def stiffness_coefficients(p) -> list[complex]:
     """Coefficients of (K_tool, K_holder, T0, T1, R0, R1) in K̃(p), six complex numbers.
 
-    p is the optimiser's vector of MODEL.md §8.1 (log10 of the four intensities, alpha
+    p is the optimiser's vector of docs/physics.md §2 (log10 of the four intensities, alpha
     [%], density factor, modulus factor); the contact intensities per mm become line
     stiffnesses per metre (× 1e3), as in :attr:`HolderParams.c_t`. Plain Python
     arithmetic: this runs once per candidate, where numpy's per-call cost would dominate.
@@ -662,7 +663,7 @@ class FastEvaluator:
         Parameters
         ----------
         p : array_like, shape (7,)
-            Parameter vector of MODEL.md §8.1 (see :func:`taptune.model.params.to_p`).
+            Parameter vector of docs/physics.md §2 (see :func:`taptune.model.params.to_p`).
         window_hz : array_like, shape (m,)
             Frequencies [Hz], > 0.
 
