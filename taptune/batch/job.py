@@ -107,7 +107,7 @@ def _machine(params, model_options, item: Item, options: BatchOptions) -> Machin
 
 def _ok_row(item: Item, view, seconds: float, data: dict, part: MachinePart | None) -> Row:
     """The summary row of an identified recording, with the machine part's numbers or why they are missing."""
-    note = _warning_note(data)
+    note = _warning_note(data, item.json_path)
     if part is not None and part.error:
         note = "; ".join(filter(None, [f"{MACHINE_FAILED} {part.error}", note]))
     best = part.best_pocket if part is not None and part.best_pocket else (None, None)
@@ -133,9 +133,13 @@ def _pages(result, analyses, recordings, items: Sequence[Item], model_options, o
         return ()
 
 
-def _warning_note(data: dict) -> str:
-    n = len(data.get("warnings", ()))
-    return "" if n == 0 else f"{n} warning{'s' if n > 1 else ''}: {one_line(data['warnings'][0])}"
+def _warning_note(data: dict, json_path) -> str:
+    """The first warning, and how many more the result JSON holds (a line, not a report)."""
+    warnings = data.get("warnings", ())
+    if not warnings:
+        return ""
+    more = f" (and {len(warnings) - 1} more in {Path(json_path).name})" if len(warnings) > 1 else ""
+    return f"{len(warnings)} warning{'s' if len(warnings) > 1 else ''}: {one_line(warnings[0])}{more}"
 
 
 def _slim(analysis):

@@ -19,7 +19,7 @@ from typing import Sequence
 from taptune.batch.on_machine import skipped_note
 from taptune.batch.records import AUDIO_SUFFIXES, BatchOptions, Item, Row, first_three, one_line
 from taptune.errors import InputError
-from taptune.io.assembly import load_assembly
+from taptune.io.assembly import assembly_beside, load_assembly
 from taptune.library.schema import sha256_file
 from taptune.library.store import HolderLibrary, default_library_path
 
@@ -56,21 +56,12 @@ def discover(paths: Sequence[str | os.PathLike]) -> tuple[list[Path], list[Row]]
 
 
 def find_assembly(recording: Path, assembly: str | os.PathLike | None = None) -> Path | None:
-    """The assembly file of ``recording``; None if there is none.
-
-    ``assembly`` if given; else, beside the recording, ``<stem>.toml``, then the stem
-    without a ``_tap``/``-tap`` ending (``er32_d16_tap.wav`` → ``er32_d16.toml``, as in
-    ``recordings/``), then ``assembly.toml``.
-    """
+    """The assembly file of ``recording``: ``assembly`` if given, else the one beside it
+    (:func:`taptune.io.assembly.assembly_beside`, as ``taptune identify`` finds it); None
+    if there is none."""
     if assembly is not None:
         return Path(assembly)
-    stem = recording.stem
-    bare = stem[:-4] if stem.lower().endswith(("_tap", "-tap")) and len(stem) > 4 else stem
-    for candidate in (recording.with_suffix(".toml"), recording.with_name(bare + ".toml"),
-                      recording.parent / "assembly.toml"):
-        if candidate.is_file():
-            return candidate
-    return None
+    return assembly_beside(recording)
 
 
 def result_names(files: Sequence[Path]) -> dict[Path, Path]:

@@ -30,6 +30,7 @@ def add_parser(sub, name, help_text):
 def print_check(check, stream=None) -> None:
     """The per-mode table and the verdict in words, for people."""
     from taptune.cli.common import format_table
+    from taptune.report.text import signed
 
     stream = stream or sys.stdout
     r = check.result
@@ -37,7 +38,7 @@ def print_check(check, stream=None) -> None:
     rows = []
     for m in r.modes:
         measured = "—" if m.measured_hz is None else f"{m.measured_hz:.1f}"
-        dev = "—" if m.deviation_pct is None else f"{m.deviation_pct:+.2f}"
+        dev = "—" if m.deviation_pct is None else signed(m.deviation_pct, 2)
         rows.append([f"f{m.mode}", measured, f"{m.predicted_hz:.1f} ± {m.band_hz:.1f}", dev, m.status])
     print(format_table(rows, ["mode", "measured [Hz]", "predicted [Hz]", "deviation [%]", "status"]), file=stream)
     band = check.prediction.band

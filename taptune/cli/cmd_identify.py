@@ -1,4 +1,4 @@
-"""``taptune identify WAV... --assembly FILE... [--library PATH] [--seed N] [--json OUT] [--plot PNG] [--no-save | --save-anyway]``."""
+"""``taptune identify WAV... [--assembly FILE...] [--library PATH] [--seed N] [--json OUT] [--plot PNG] [--no-save | --save-anyway]``."""
 
 from __future__ import annotations
 
@@ -11,8 +11,9 @@ def add_parser(sub, name, help_text):
         "the holder in the library. Several recordings of one holder (other tools or stick-outs) "
         "are fitted jointly: give one --assembly per recording, in the same order."))
     p.add_argument("wav", nargs="+", help="tap recording(s): WAV, FLAC, MP3, Ogg/Opus, M4A/AAC or a phone video")
-    p.add_argument("--assembly", action="append", required=True, metavar="FILE",
-                   help="assembly TOML (once for all recordings, or once per recording)")
+    p.add_argument("--assembly", action="append", metavar="FILE",
+                   help="assembly TOML (once for all recordings, or once per recording; default: the one "
+                        "beside each recording: <name>.toml, <name without _tap>.toml or assembly.toml)")
     p.add_argument("--library", metavar="PATH", help="holder library file (default: $TAPTUNE_LIBRARY or the user data folder)")
     p.add_argument("--seed", type=int, default=0, help="random seed: the same seed gives the same result (default 0)")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
@@ -24,6 +25,22 @@ def add_parser(sub, name, help_text):
                         "(without it such a fit is reported, exit 2, and not stored)")
     p.add_argument("--jobs", type=int, default=None, help="processes for the optimiser (default: all cores)")
     return p
+
+
+def assemblies_beside(wavs) -> list[str]:
+    """The assembly file beside each recording, named on stderr; an InputError if one has none."""
+    from taptune.errors import InputError
+    from taptune.io.assembly import assembly_beside, assembly_candidates
+
+    found = []
+    for wav in wavs:
+        path = assembly_beside(wav)
+        if path is None:
+            tried = ", ".join(c.name for c in assembly_candidates(wav))
+            raise InputError(f"{wav}: no assembly file beside it ({tried}); give one with --assembly FILE")
+        print(f"assembly of {wav}: {path} (beside it)", file=sys.stderr)
+        found.append(str(path))
+    return found
 
 
 def load_inputs(wavs, assembly_files):
@@ -51,6 +68,7 @@ def run_identification(recordings, assemblies, seed=0, jobs=None, progress=None)
 
 def print_summary(out: dict, result, stream=None) -> None:
     from taptune.cli.common import format_table
+    from taptune.report.text import signed
 
     stream = stream or sys.stdout
     measured = result.bending_measured_hz
@@ -58,7 +76,7 @@ def print_summary(out: dict, result, stream=None) -> None:
     print(f"holder: {out['holder']}", file=stream)
     for i, (m, f) in enumerate(zip(measured, model)):
         rows = [[f"f{n + 1}", "—" if m[n] is None else f"{m[n]:.1f}", f"{f[n]:.1f}",
-                 "—" if m[n] is None else f"{100 * (f[n] / m[n] - 1):+.3f}"] for n in range(3)]
+                 "—" if m[n] is None else signed(100 * (f[n] / m[n] - 1), 3)] for n in range(3)]
         if len(measured) > 1:
             print(f"recording {i + 1}:", file=stream)
         print(format_table(rows, ["mode", "measured [Hz]", "model [Hz]", "error [%]"]), file=stream)
@@ -66,7 +84,7 @@ def print_summary(out: dict, result, stream=None) -> None:
     spread = result.param_spread
     print(
         f"k_tt = {p.k_tt:.3g} ± {spread['k_tt']:.2g} N/m/mm   k_rr = {p.k_rr:.3g} ± {spread['k_rr']:.2g} N·m/rad/mm\n"
-        f"eta_tt = {p.eta_tt:.3g} 1/mm   eta_rr = {p.eta_rr:.3g} 1/mm   alpha = {p.alpha:+.1f} %   "
+        f"eta_tt = {p.eta_tt:.3g} 1/mm   eta_rr = {p.eta_rr:.3g} 1/mm   alpha = {signed(p.alpha, 1)} %   "
         f"density ×{p.density_factor:.3f}   modulus ×{p.modulus_factor:.3f}",
         file=stream,
     )
@@ -89,6 +107,8 @@ def run(args) -> int:
     from taptune.cli.common import check_seed_and_jobs
 
     check_seed_and_jobs(args)
+    if not args.assembly:
+        args.assembly = assemblies_beside(args.wav)
     library = None
     if not args.no_save:
         # The library's modules only when the holder is stored (--no-save skips their import).

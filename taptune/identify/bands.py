@@ -154,7 +154,7 @@ class Band:
         names = ("what the tap cannot tell apart", "the stated geometry tolerances", "what the model leaves out")
         main = names[int(np.argmax(parts.sum(axis=1)))]
         where = ("" if self.delta_stickout_mm is None
-                 else f" {self.delta_stickout_mm:.0f} mm from the tapped stick-out,")
+                 else f" {round(self.delta_stickout_mm, 1):g} mm from the tapped stick-out,")  # 6.5, not 6
         evidence = ""
         if self.model_form_groups:
             words = {"pinned": "pinned by the tap", "free": "not pinned by the tap", "unknown": "not measured in the tap"}

@@ -556,6 +556,25 @@ def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
     return parse_assembly(_loads(text, source), source)
 
 
+def assembly_candidates(recording: str | Path) -> list[Path]:
+    """Where the assembly file of a recording may be, in the order they are tried.
+
+    Beside the recording: ``<stem>.toml``, then the stem without a ``_tap``/``-tap``
+    ending (``er32_d16_tap.wav`` → ``er32_d16.toml``, as in ``recordings/``), then
+    ``assembly.toml``.
+    """
+    recording = Path(recording)
+    stem = recording.stem
+    bare = stem[:-4] if stem.lower().endswith(("_tap", "-tap")) and len(stem) > 4 else stem
+    return list(dict.fromkeys([recording.with_suffix(".toml"), recording.with_name(bare + ".toml"),
+                               recording.parent / "assembly.toml"]))
+
+
+def assembly_beside(recording: str | Path) -> Path | None:
+    """The assembly file beside a recording (:func:`assembly_candidates`); None if there is none."""
+    return next((c for c in assembly_candidates(recording) if c.is_file()), None)
+
+
 def load_assembly(path: str | Path) -> Assembly:
     """Read and validate an assembly TOML file (docs/assembly-format.md)."""
     return assembly_from_toml(read_text(path, "an assembly file", "TOML"), str(path))

@@ -1,0 +1,56 @@
+"""Small things a user reads: no "-0.000", a warning count that matches what is shown,
+the stick-out change as given, and identify finding the assembly file beside the WAV."""
+
+from __future__ import annotations
+
+import shutil
+
+from taptune.cli import main
+from tests.conftest import REPO
+
+
+def test_a_number_that_rounds_to_zero_has_no_sign():
+    from taptune.report.text import signed
+
+    assert [signed(v, 3) for v in (-0.0004, 0.0004, 0.0, -0.0)] == ["0.000"] * 4
+    assert signed(0.0234, 3) == "+0.023" and signed(-1.5, 2) == "-1.50" and signed(-0.006, 2) == "-0.01"
+
+
+def test_the_batch_line_names_as_many_warnings_as_it_shows_or_says_where_the_rest_are():
+    from taptune.batch.job import _warning_note
+
+    assert _warning_note({"warnings": []}, "out/tap.json") == ""
+    assert _warning_note({"warnings": ["faint mode 3"]}, "out/tap.json") == "1 warning: faint mode 3"
+    two = _warning_note({"warnings": ["faint mode 3", "one recording only"]}, "out/tap.json")
+    assert two == "2 warnings: faint mode 3 (and 1 more in tap.json)"
+
+
+def test_the_band_says_the_stick_out_change_as_given():
+    from taptune.identify.bands import Band
+    from taptune.io.assembly import Tolerances
+
+    band = Band(half_width_hz=(50.0, 100.0, 150.0), set_hz=(10.0,) * 3, geometry_hz=(40.0,) * 3,
+                model_form_hz=(20.0,) * 3, geometry_parts_hz={}, delta_stickout_mm=6.5, recordings=1,
+                tolerances=Tolerances())
+    assert " 6.5 mm from the tapped stick-out" in band.text((3000.0, 9000.0, 15000.0))
+
+
+def test_identify_without_assembly_takes_the_one_beside_the_wav(tmp_path, capsys):
+    from taptune.cli.cmd_identify import assemblies_beside
+
+    wav = tmp_path / "er32_d16_tap.wav"
+    shutil.copyfile(REPO / "recordings" / "er32_d16_tap.wav", wav)
+    shutil.copyfile(REPO / "recordings" / "er32_d16.toml", tmp_path / "er32_d16.toml")
+    assert assemblies_beside([str(wav)]) == [str(tmp_path / "er32_d16.toml")]
+    assert "er32_d16.toml (beside it)" in capsys.readouterr().err
+    (tmp_path / "er32_d16_tap.toml").write_text("")  # the recording's own name comes first
+    assert assemblies_beside([str(wav)]) == [str(tmp_path / "er32_d16_tap.toml")]
+
+
+def test_identify_without_assembly_and_none_beside_is_one_line(tmp_path, capsys):
+    wav = tmp_path / "lonely.wav"
+    shutil.copyfile(REPO / "recordings" / "er32_d16_tap.wav", wav)
+    code = main(["identify", str(wav), "--no-save"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "lonely.wav: no assembly file beside it (lonely.toml, assembly.toml); give one with --assembly FILE" in err
