@@ -62,6 +62,23 @@ def test_the_sdist_carries_docs_examples_and_tests(dist):
         assert path in names, path
 
 
+def test_a_wheel_built_from_the_sdist_carries_the_examples(dist, tmp_path):
+    import zipfile
+
+    (sdist,) = dist.glob("taptune-*.tar.gz")
+    with tarfile.open(sdist) as tar:
+        tar.extractall(tmp_path, filter="data")
+    (src,) = tmp_path.glob("taptune-*")
+    code = "from setuptools import build_meta as b; print(b.build_wheel(r'%s'))" % (tmp_path / "dist")
+    done = subprocess.run([sys.executable, "-c", code], cwd=src, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    (wheel,) = (tmp_path / "dist").glob("taptune-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for rel in ("recordings/demo.json", "recordings/er32_d16_tap.wav", "recordings/machine/spindle_y.csv",
+                "assets/hydraulic_hsk63_d20.toml"):
+        assert f"taptune/examples/{rel}" in names, rel
+
+
 def test_the_installed_wheel_runs_the_demo_and_copies_the_examples(dist, tmp_path):
     (wheel,) = dist.glob("taptune-*.whl")
     env_dir = tmp_path / "venv"
