@@ -189,7 +189,6 @@ def test_lobes_single_mode_slotting_matches_the_closed_form(tmp_path, capsys):
     assert 60 * fn / 4 < best["rpm"] < 1.1 * 60 * fn / 4
 
 
-@needs_d01
 def test_lobes_of_a_two_line_frf_name_the_file(tmp_path, capsys):
     frf = tmp_path / "short.csv"
     frf.write_text("f_hz,xx_re,xx_im\n100,1e-7,-1e-9\n200,1e-7,-1e-9\n")
