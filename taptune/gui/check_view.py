@@ -15,6 +15,7 @@ from PySide6.QtGui import QColor
 from PySide6.QtWidgets import QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
 from taptune.gui.layout import read_only_table, set_rows
+from taptune.gui.numbers import number
 
 #: Verdict -> (colour, headline, what to do).
 VERDICTS = {
@@ -106,7 +107,7 @@ class CheckView(QWidget):
             self.table.setItem(row, 0, _cell(f"f{m.mode}"))
             self.table.setItem(row, 1, _cell("—" if m.measured_hz is None else f"{m.measured_hz:,.1f}"))
             self.table.setItem(row, 2, _cell(f"{m.predicted_hz:,.1f} ± {m.band_hz:,.1f}"))
-            self.table.setItem(row, 3, _cell("—" if m.deviation_pct is None else f"{m.deviation_pct:+.2f} %"))
+            self.table.setItem(row, 3, _cell("—" if m.deviation_pct is None else f"{number(m.deviation_pct, '+.2f')} %"))
             self.table.setItem(row, 4, _cell(m.status, colour))
         lines = [f"• {html.escape(x)}" for x in check.result.reasons]
         lines += [f"⚠ {html.escape(w)}" for w in check.warnings]
