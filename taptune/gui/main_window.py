@@ -122,7 +122,7 @@ class MainWindow(QMainWindow):
     stream_factory, devices : optional
         Passed to the recording panel (tests use a fake input stream).
     settings : QSettings, optional
-        Where choices are remembered (the machine file); default: the user's settings.
+        Where choices are remembered (the machine file, the recordings folder); default: the user's settings.
     """
 
     analysis_ready = Signal(object)
@@ -161,7 +161,8 @@ class MainWindow(QMainWindow):
         self._identify_task = None
 
         self.assembly_panel = AssemblyPanel()
-        self.recorder = RecorderPanel(self._assembly_for_recording, stream_factory=stream_factory, devices=devices)
+        self.recorder = RecorderPanel(self._assembly_for_recording, stream_factory=stream_factory, devices=devices,
+                                      settings=settings)
         self.spectrum = SpectrumView()
         self.spectrum2 = SpectrumView()
         self.fit = FitView()
