@@ -638,10 +638,11 @@ class MainWindow(QMainWindow):
         (the band 20 mm further out, 0.2 s) runs after the fitted view is up; the banner
         shows only if no newer identification has replaced this one meanwhile."""
 
-        def show(text) -> None:
-            if text and self.identification is result:
-                self.banner.show_text(text)
-            emit(self.advice_ready, text or "")
+        def show(advice) -> None:
+            line, details = advice or ("", "")
+            if line and self.identification is result:
+                self.banner.show_text(line, details)
+            emit(self.advice_ready, line)
 
         def failed(message: str) -> None:
             self.statusBar().showMessage(f"No second-tap advice: {message}", 8000)

@@ -60,8 +60,12 @@ def test_open_identify_save_and_predict(qtbot, window, generated_recording, libr
     with qtbot.waitSignal(window.advice_ready, timeout=30000) as advised:
         pass
     expected = second_tap_advice(result, window.assembly_panel.assembly)
-    assert advised.args == [expected or ""]
+    assert advised.args == [expected[0] if expected else ""]
     assert window.banner.isVisible() == bool(expected)
+    if expected:  # one line over the views; the details on demand
+        assert window.banner.text.text() == expected[0] and not window.banner.details.isVisible()
+        window.banner.details_button.click()
+        assert window.banner.details.isVisible() and window.banner.details.text() == expected[1]
 
     # A library that cannot be written: a message, and the identification is kept.
     blocker_file = library_path.parent / "not-a-folder"
