@@ -1,4 +1,4 @@
-"""Numbers as the views print them: no negative zero, and no ± wider than the value it qualifies.
+"""Numbers and dates as the views print them: no negative zero, no ± wider than the value it qualifies, one date form.
 
 A difference that rounds to zero prints ``0.00 %``, not ``-0.00 %`` (which reads as a
 real, if tiny, error). A parameter whose spread over the near-optimal fits is larger than
@@ -33,3 +33,8 @@ def number(value: float, spec: str) -> str:
 def determined(value: float, spread: float) -> bool:
     """Whether the tap fixes ``value``: its spread over the near-optimal fits is no larger than it."""
     return math.isfinite(value) and math.isfinite(spread) and abs(spread) <= abs(value)
+
+
+def date_text(iso: str) -> str:
+    """A stored UTC time (``2026-11-27T08:21:49Z``) as every view shows it: ``2026-11-27 08:21:49``."""
+    return iso.replace("T", " ").rstrip("Z")

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from taptune.gui.numbers import NOT_DETERMINED, determined, number
+from taptune.gui.numbers import NOT_DETERMINED, date_text, determined, number
 
 
 @pytest.mark.parametrize("value, spec, text", [
@@ -70,3 +70,7 @@ def test_an_empty_assembly_form_starts_empty_and_says_what_is_missing(qtbot):
     # Not "1.0 mm" and "0.1 mm": nothing is set until the user sets it.
     assert panel.stickout.text() == NOT_SET and panel.clamp.text() == NOT_SET
     assert panel.message.text().startswith("Still missing: a holder, a tool, the stick-out.")
+
+
+def test_one_date_form_for_every_view():
+    assert date_text("2026-11-27T08:21:49Z") == "2026-11-27 08:21:49"
