@@ -23,7 +23,6 @@ from PySide6.QtWidgets import (
     QCheckBox,
     QPushButton,
     QScrollArea,
-    QSizePolicy,
     QSplitter,
     QTabWidget,
     QVBoxLayout,
@@ -34,6 +33,7 @@ from taptune.gui.advice import Banner, second_tap_advice
 from taptune.gui.assembly_panel import AssemblyPanel
 from taptune.gui.check_view import CheckView
 from taptune.gui.fit_view import FitView
+from taptune.gui.layout import ElidedLabel
 from taptune.gui.library_view import LibraryView
 from taptune.gui.machine_view import MachineView
 from taptune.gui.messages import show_error
@@ -208,11 +208,9 @@ class MainWindow(QMainWindow):
         self.progress.setRange(0, 1000)
         self.progress.setTextVisible(True)
         self.progress.setFormat("")
-        self.file_label = QLabel("No recording")
-        self.file_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
         # Two long file names must not widen the window past a laptop screen: the label
-        # gives way (the tooltip has the names in full).
-        self.file_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+        # shortens them in the middle, keeping both ends (the tooltip has the paths in full).
+        self.file_label = ElidedLabel("No recording")
         self.file_label.setMinimumWidth(120)
         self.open_button.clicked.connect(self._open_dialog)
         self.open2_button.clicked.connect(self._open_second_dialog)
