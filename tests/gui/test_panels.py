@@ -169,3 +169,18 @@ def test_without_a_display_the_window_is_not_opened_invisibly(monkeypatch, capsy
     monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
     assert main(["gui"]) == 1
     assert "no display" in capsys.readouterr().err
+
+
+def test_holder_and_tool_names_are_not_cut_off_on_a_laptop_screen(qtbot, window):
+    from PySide6.QtWidgets import QStyle, QStyleOptionComboBox
+
+    panel = window.assembly_panel  # the window is 1366x768
+    qtbot.waitExposed(window)
+    for combo in (panel.holder_combo, panel.tool_combo):
+        option = QStyleOptionComboBox()
+        combo.initStyleOption(option)
+        room = combo.style().subControlRect(QStyle.CC_ComboBox, option, QStyle.SC_ComboBoxEditField, combo).width()
+        names = [combo.itemText(i) for i in range(1, combo.count())]
+        widest = max(combo.fontMetrics().horizontalAdvance(n) for n in names)
+        assert widest <= room, f"{max(names, key=combo.fontMetrics().horizontalAdvance)!r} needs {widest} px of {room}"
+        assert combo.view().minimumWidth() >= widest  # the open list too
