@@ -10,7 +10,7 @@ predictor at 1920×1080 too; saved as 256-colour PNGs (a screenshot has few colo
 Run: ``python scripts/make_screenshots.py [--only NAME …] [--out DIR]`` (a minute or two;
 the window is rendered offscreen where there is no display). Nothing outside ``--out``
 (default docs/screenshots/) is changed: the library, the settings and the recordings
-live in a temporary folder.
+live in the temporary folder taptune-screenshots (removed at the end).
 """
 
 from __future__ import annotations
@@ -90,10 +90,12 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "screenshots")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="taptune-shots-") as tmp:
-        tmp = Path(tmp)
-        inputs = tmp / "in"
-        inputs.mkdir()
+    # A fixed, plain folder: the pictures show its paths (library, recordings).
+    tmp = Path(tempfile.gettempdir()) / "taptune-screenshots"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        inputs = tmp / "taps"
+        inputs.mkdir(parents=True)
         make_inputs(inputs)
         # A user's view of it: a plain home folder (the Record view shows where recordings go),
         # settings and library of its own.
@@ -115,6 +117,8 @@ def main() -> None:
                          "--screenshot", str(png)], shot_env)
                 save_small(png)
                 print(f"{png.relative_to(REPO) if png.is_relative_to(REPO) else png}: {png.stat().st_size / 1024:.0f} kB")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 if __name__ == "__main__":

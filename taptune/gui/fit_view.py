@@ -106,6 +106,7 @@ class FitView(QWidget):
         spread = result.param_spread
         self.param_table.clearSpans()
         undetermined = []
+        taps = "this tap" if n == 1 else "these taps"
         for r, (key, label, unit, fmt) in enumerate(PARAM_ROWS):
             value = getattr(result.params, key)
             self.param_table.setItem(r, 0, _cell(label, Qt.AlignLeft | Qt.AlignVCenter))
@@ -117,9 +118,9 @@ class FitView(QWidget):
             # A ± wider than the value would read as a measurement: say it in words.
             item = _cell(NOT_DETERMINED, Qt.AlignCenter)
             item.setForeground(QColor("#666666"))
-            item.setToolTip(f"Not determined by this tap: best fit {number(value, fmt)} {unit}, but the "
-                            f"near-optimal fits spread ±{number(spread[key], fmt)}. "
-                            "A second tap at another stick-out may pin it.")
+            item.setToolTip(f"Not determined by {taps}: best fit {number(value, fmt)} {unit}, but the "
+                            f"near-optimal fits spread ±{number(spread[key], fmt)}."
+                            + (" A second tap at another stick-out may pin it." if n == 1 else ""))
             undetermined.append(label)
             self.param_table.setItem(r, 1, item)
             self.param_table.setItem(r, 2, None)
@@ -129,7 +130,7 @@ class FitView(QWidget):
             f"Objective {result.objective:.3g} after {result.evaluations:,} model evaluations "
             f"in {result.seconds:.1f} s; {len(result.param_sets)} near-optimal parameter sets.")
         if undetermined:
-            text += (f" Not determined by this tap (their fits spread more than their value): "
+            text += (f" Not determined by {taps} (their fits spread more than their value): "
                      f"{', '.join(undetermined)}.")
         if result.warnings:
             text += "\n⚠ " + "\n⚠ ".join(result.warnings)
