@@ -126,7 +126,9 @@ def run(wav=None, assembly=None, library=None, screenshot=None, size=(1366, 768)
     ``holder`` (a library entry) opens the predictor with it and the assembly's tool;
     ``second`` is a recording at another stick-out, identified jointly with ``wav``;
     ``machine`` a machine file for the Machine view (remembered unless taking a screenshot);
-    ``check`` checks ``wav`` against ``holder`` before the screenshot.
+    ``check`` checks ``wav`` against ``holder`` before the screenshot. ``view`` is a view's
+    name, or a list of names with ``screenshot`` a file name holding ``{view}``: one
+    picture per view from one window (what the real-display test takes).
 
     Returns the exit status: 0, or 2 when the recording could not be analysed in
     screenshot mode (the picture shows the message), 1 when identification failed.
@@ -198,12 +200,16 @@ def _show(app, window, wav, assembly, screenshot, size, view, identify, holder, 
                     status = 1
     if not screenshot:
         return app.exec()
-    if view:
-        window.show_view(view)
-    settle(window)
-    if not _save_png(window.grab(), screenshot):
-        print(f"taptune gui: cannot write {screenshot}", file=sys.stderr)
-        status = 1
+    # Several views: one picture each, named by the "{view}" in the file name.
+    views = [view] if view is None or isinstance(view, str) else list(view)
+    for name in views:
+        if name:
+            window.show_view(name)
+        settle(window)
+        path = screenshot.replace("{view}", name) if len(views) > 1 else screenshot
+        if not _save_png(window.grab(), path):
+            print(f"taptune gui: cannot write {path}", file=sys.stderr)
+            status = 1
     window.close()
     return status
 

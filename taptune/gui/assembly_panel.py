@@ -36,6 +36,7 @@ from taptune.gui.assembly_drawing import AssemblyDrawing
 from taptune.gui.signals import emit
 
 MM = 1e-3
+NOT_SET = "not set"
 INTERFACES = ("HSK-A63", "HSK-A100", "HSK-E40", "SK40", "BT40", "CAT40", "unknown")
 
 
@@ -46,8 +47,8 @@ def assets_dir() -> Path:
     return shipped()
 
 
-def read_asset_tables(folder: Path) -> tuple[list[tuple[str, dict]], list[tuple[str, dict]]]:
-    """Holder and tool tables of every TOML file under ``folder``: ([(label, table)], [(label, table)]).
+def read_asset_tables(folder: Path) -> tuple[list[tuple[str, Path, dict]], list[tuple[str, Path, dict]]]:
+    """Holder and tool tables of every TOML file under ``folder``: ``([(name, file, table)], [...])``.
 
     A file may hold a ``[holder]``, a ``[tool]`` or both (a whole assembly); files that
     are not valid TOML are skipped (they are reported when opened directly). A valid
@@ -70,9 +71,9 @@ def read_asset_tables(folder: Path) -> tuple[list[tuple[str, dict]], list[tuple[
         except InputError:
             pass  # a holder-only or tool-only file: its tables are used as written
         if isinstance(data.get("holder"), dict) and "name" in data["holder"]:
-            holders.append((f"{data['holder']['name']}  [{path.stem}]", data["holder"]))
+            holders.append((str(data["holder"]["name"]), path, data["holder"]))
         if isinstance(data.get("tool"), dict):
-            tools.append((f"{data['tool'].get('name', path.stem)}  [{path.stem}]", data["tool"]))
+            tools.append((str(data["tool"].get("name", path.stem)), path, data["tool"]))
     return holders, tools
 
 
@@ -93,9 +94,59 @@ def tool_table(tool) -> dict:
     return table
 
 
-def _spin(lo: float, hi: float, decimals: int = 2, suffix: str = " mm") -> QDoubleSpinBox:
+def _named(choices, folder: Path) -> list[tuple[str, dict, str]]:
+    """``[(name, file, table)]`` of :func:`read_asset_tables` as list entries ``[(label, table, where)]``.
+
+    The name alone is the label; a name found in several files gets its file's name to tell them apart.
+    """
+    names = [name for name, _, _ in choices]
+    out = []
+    for name, path, table in choices:
+        label = f"{name}  [{path.stem}]" if names.count(name) > 1 else name
+        where = f"from {folder.name}/{path.relative_to(folder).as_posix()}"
+        out.append((label, table, where))
+    return out
+
+
+def _with_headings(sections) -> list[tuple[str, dict | None, str]]:
+    """The choices of a list: the prompt, then per non-empty section a heading (no table) and its entries."""
+    out = [("", None, "")]
+    for heading, entries in sections:
+        if entries:
+            out.append((f"— {heading} —", None, ""))
+            out.extend(entries)
+    return out
+
+
+def _fill_combo(combo: QComboBox, choices, prompt: str) -> None:
+    """Fill ``combo`` with ``prompt`` and ``choices``; headings cannot be picked; the list opens wide enough."""
+    from PySide6.QtGui import QFontMetrics
+
+    combo.blockSignals(True)
+    combo.clear()
+    combo.addItem(prompt)
+    for label, table, where in choices[1:]:
+        combo.addItem(label)
+        i = combo.count() - 1
+        if table is None:
+            item = combo.model().item(i)
+            item.setEnabled(False)
+            item.setSelectable(False)
+        else:
+            combo.setItemData(i, where, Qt.ToolTipRole)
+    metrics = QFontMetrics(combo.font())
+    widest = max((metrics.horizontalAdvance(combo.itemText(i)) for i in range(combo.count())), default=0)
+    combo.view().setMinimumWidth(widest + 40)  # the open list shows whole names, however narrow the panel
+    combo.setToolTip("")
+    combo.blockSignals(False)
+
+
+def _spin(lo: float, hi: float, decimals: int = 2, suffix: str = " mm", unset: bool = False) -> QDoubleSpinBox:
+    """A number field; ``unset``: it starts empty ("not set", the value 0) instead of at ``lo``."""
     box = QDoubleSpinBox()
-    box.setRange(lo, hi)
+    box.setRange(0.0 if unset else lo, hi)
+    if unset:
+        box.setSpecialValueText(NOT_SET)
     box.setDecimals(decimals)
     box.setSuffix(suffix)
     box.setKeyboardTracking(False)  # validate the number once it is typed, not every keystroke
@@ -178,7 +229,7 @@ class AssemblyPanel(QWidget):
         for combo in (self.holder_combo, self.tool_combo):
             combo.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)
             combo.setMinimumContentsLength(18)
-        self.stickout = _spin(1.0, 500.0, 1)
+        self.stickout = _spin(1.0, 500.0, 1, unset=True)
         self.stickout.setToolTip("Length of tool outside the holder front face")
         # A second tap of the same holder and tool at another stick-out, fitted jointly:
         # 0 shows "none" (one recording only).
@@ -197,7 +248,7 @@ class AssemblyPanel(QWidget):
         self.interface = QComboBox()
         self.interface.setEditable(True)
         self.interface.addItems(INTERFACES)
-        self.clamp = _spin(0.1, 500.0, 1)
+        self.clamp = _spin(0.1, 500.0, 1, unset=True)
         self.segments = SegmentsTable()
         add, remove = QPushButton("Add segment"), QPushButton("Remove")
         add.clicked.connect(self.segments.add_row)
@@ -217,11 +268,12 @@ class AssemblyPanel(QWidget):
 
         # Tool dimensions.
         self.tool_name = QLineEdit()
-        self.total_length = _spin(1.0, 1000.0, 2)
-        self.shank = _spin(0.1, 200.0, 2)
-        self.flute_length = _spin(0.1, 1000.0, 2)
-        self.flute_diameter = _spin(0.1, 200.0, 2)
+        self.total_length = _spin(1.0, 1000.0, 2, unset=True)
+        self.shank = _spin(0.1, 200.0, 2, unset=True)
+        self.flute_length = _spin(0.1, 1000.0, 2, unset=True)
+        self.flute_diameter = _spin(0.1, 200.0, 2, unset=True)
         self.flute_ratio = _spin(0.05, 1.5, 2, "")
+        self.flute_ratio.setValue(0.8)
         self.flute_ratio.setToolTip("The fluted part is modelled as a cylinder of ratio × flute diameter")
         self.stepped_note = QLabel()
         self.stepped_note.setWordWrap(True)
@@ -273,6 +325,7 @@ class AssemblyPanel(QWidget):
         self.holder_combo.activated.connect(self._holder_picked)
         self.tool_combo.activated.connect(self._tool_picked)
         self.reload_choices()
+        self._edited()  # an empty form says what it needs
 
     # ------------------------------------------------------------------ choices
 
@@ -282,20 +335,21 @@ class AssemblyPanel(QWidget):
         return self._assembly
 
     def reload_choices(self, library_entries: dict | None = None) -> None:
-        """Refill the holder and tool lists from ``assets/`` and the library entries given."""
+        """Refill the holder and tool lists from ``assets/`` and the library entries given.
+
+        Each list shows plain names (the file a name comes from is its tooltip) under a
+        heading per source, so that a name is not cut off on a laptop screen.
+        """
         if library_entries is not None:
             self.library_holders = {name: entry.holder for name, entry in library_entries.items()}
-        holders, tools = read_asset_tables(assets_dir())
-        self._holder_choices = [("", None)] + [(f"library: {n}", h) for n, h in self.library_holders.items()] + holders
-        self._tool_choices = [("", None)] + tools
+        folder = assets_dir()
+        holders, tools = read_asset_tables(folder)
+        library = [(n, h, "from the holder library") for n, h in self.library_holders.items()]
+        self._holder_choices = _with_headings((("holder library", library), ("examples", _named(holders, folder))))
+        self._tool_choices = _with_headings((("examples", _named(tools, folder)),))
         for combo, choices, what in ((self.holder_combo, self._holder_choices, "holder"),
                                      (self.tool_combo, self._tool_choices, "tool")):
-            combo.blockSignals(True)
-            combo.clear()
-            combo.addItem(f"choose a {what}…" if len(choices) > 1 else f"no {what} in assets or library")
-            for label, _ in choices[1:]:
-                combo.addItem(label)
-            combo.blockSignals(False)
+            _fill_combo(combo, choices, f"choose a {what}…" if len(choices) > 1 else f"no {what} in assets or library")
         for combo, choices, table in ((self.holder_combo, self._holder_choices, self._holder),
                                       (self.tool_combo, self._tool_choices, self._tool)):
             if table is not None:
@@ -304,6 +358,7 @@ class AssemblyPanel(QWidget):
     def _holder_picked(self, index: int) -> None:
         table = self._holder_choices[index][1] if 0 <= index < len(self._holder_choices) else None
         if table is not None:
+            self.holder_combo.setToolTip(f"{self.holder_combo.itemText(index)}: {self._holder_choices[index][2]}")
             self._holder = copy.deepcopy(table)
             self._fill_holder()
             self._edited()
@@ -311,6 +366,7 @@ class AssemblyPanel(QWidget):
     def _tool_picked(self, index: int) -> None:
         table = self._tool_choices[index][1] if 0 <= index < len(self._tool_choices) else None
         if table is not None:
+            self.tool_combo.setToolTip(f"{self.tool_combo.itemText(index)}: {self._tool_choices[index][2]}")
             self._tool = copy.deepcopy(table)
             self._fill_tool()
             self._edited()
@@ -399,21 +455,24 @@ class AssemblyPanel(QWidget):
     @staticmethod
     def _show_current(combo: QComboBox, choices, table: dict) -> None:
         """Select the list entry with this geometry, or name it in the first entry."""
-        for i, (_, candidate) in enumerate(choices):
+        for i, (_, candidate, where) in enumerate(choices):
             if candidate is not None and candidate == table:
                 combo.setCurrentIndex(i)
+                combo.setToolTip(f"{combo.itemText(i)}: {where}")
                 return
         combo.setItemText(0, f"{table.get('name', '?')} (from file or edited)")
         combo.setCurrentIndex(0)
+        combo.setToolTip(combo.itemText(0))
 
     # ------------------------------------------------------------------ editing
 
     def _edited(self, *_args) -> None:
         if self._filling:
             return
-        if self._holder is None or self._tool is None:
-            missing = "a holder" if self._holder is None else "a tool"
-            self._show(None, f"Choose {missing}, or open an assembly file.")
+        missing = self._missing()
+        if missing:
+            self._show(None, f"Still missing: {', '.join(missing)}. Choose or enter them above, "
+                             "or open an assembly file.", hint=True)
             return
         self._holder.update(
             name=self.holder_name.text().strip(),
@@ -442,11 +501,33 @@ class AssemblyPanel(QWidget):
             return
         self._show(assembly, "\n".join(assembly.warnings))
 
-    def _show(self, assembly, message: str) -> None:
+    def _missing(self) -> list[str]:
+        """What the form still needs before it describes an assembly, in the order of the form."""
+        missing = []
+        if self._holder is None:
+            missing.append("a holder")
+        elif self.clamp.value() <= 0.0:
+            missing.append("the holder's clamp length")
+        if self._tool is None:
+            missing.append("a tool")
+        elif "segments" not in self._tool:
+            for box, what in ((self.total_length, "total length"), (self.shank, "shank Ø"),
+                              (self.flute_length, "flute length"), (self.flute_diameter, "flute Ø")):
+                if box.value() <= 0.0:
+                    missing.append(f"the tool's {what}")
+        if self.stickout.value() <= 0.0:
+            missing.append("the stick-out")
+        return missing
+
+    def _show(self, assembly, message: str, hint: bool = False) -> None:
+        """Make ``assembly`` current (None: none yet); ``message`` in red, or grey for a ``hint`` of what is missing."""
         self._assembly = assembly
-        self.drawing.set_assembly(assembly, message)
+        self.drawing.set_assembly(assembly, "no assembly yet" if hint else message)
         self.message.setText(message)
-        self.message.setStyleSheet("color: #b00020;" if assembly is None else "color: #8a6d00;")
+        colour = "#555555" if hint else "#b00020" if assembly is None else "#8a6d00"
+        self.message.setStyleSheet(f"color: {colour};")
+        for box in (self.stickout, self.clamp):  # the fields still to fill, marked
+            box.setStyleSheet("QDoubleSpinBox { background: #fff4c2; }" if box.value() <= 0.0 else "")
         emit(self.assembly_changed, assembly)
 
     # ------------------------------------------------------------------ files

@@ -15,6 +15,7 @@ from PySide6.QtGui import QColor
 from PySide6.QtWidgets import QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
 from taptune.gui.layout import read_only_table, set_rows
+from taptune.gui.numbers import date_text, number
 
 #: Verdict -> (colour, headline, what to do).
 VERDICTS = {
@@ -106,7 +107,7 @@ class CheckView(QWidget):
             self.table.setItem(row, 0, _cell(f"f{m.mode}"))
             self.table.setItem(row, 1, _cell("—" if m.measured_hz is None else f"{m.measured_hz:,.1f}"))
             self.table.setItem(row, 2, _cell(f"{m.predicted_hz:,.1f} ± {m.band_hz:,.1f}"))
-            self.table.setItem(row, 3, _cell("—" if m.deviation_pct is None else f"{m.deviation_pct:+.2f} %"))
+            self.table.setItem(row, 3, _cell("—" if m.deviation_pct is None else f"{number(m.deviation_pct, '+.2f')} %"))
             self.table.setItem(row, 4, _cell(m.status, colour))
         lines = [f"• {html.escape(x)}" for x in check.result.reasons]
         lines += [f"⚠ {html.escape(w)}" for w in check.warnings]
@@ -121,6 +122,6 @@ def checks_html(entry) -> str:
         colour = VERDICTS.get(c.verdict, ("#555555",))[0]
         measured = ", ".join(f"{m['measured_hz']:,.0f}" if m.get("measured_hz") is not None else "—"
                              for m in c.modes)
-        items.append(f"<li>{e(c.date.replace('T', ' ').rstrip('Z'))}: <b style='color:{colour}'>{e(c.verdict)}</b>"
+        items.append(f"<li>{e(date_text(c.date))}: <b style='color:{colour}'>{e(c.verdict)}</b>"
                      f" — {e(c.recording)}, {e(c.tool)} at {c.stickout_mm:g} mm, f = {measured} Hz</li>")
     return "".join(items) or "<li>none yet: open a tap of this holder and press Check</li>"

@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QColor
 from PySide6.QtWidgets import QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
 from taptune.gui.layout import column, hsplit, read_only_table, set_rows
+from taptune.gui.numbers import NOT_DETERMINED, determined, number
 from taptune.gui.plotting import MEASURED, MODEL, PlotCanvas
 
 PARAM_ROWS = (
@@ -99,18 +101,37 @@ class FitView(QWidget):
                 self.freq_table.setItem(r, 0, _cell(f"f{k + 1}" + (f" · {i + 1}" if n > 1 else ""), Qt.AlignCenter))
                 self.freq_table.setItem(r, 1, _cell(f"{m:,.1f}" if m is not None else "not found"))
                 self.freq_table.setItem(r, 2, _cell(f"{f_model:,.1f}"))
-                self.freq_table.setItem(r, 3, _cell(f"{100 * (f_model / m - 1):+.2f} %" if m else "–"))
+                self.freq_table.setItem(r, 3, _cell(f"{number(100 * (f_model / m - 1), '+.2f')} %" if m else "–"))
                 self.freq_table.setItem(r, 4, _cell(f"{100 * zeta[k]:.3f}" if k < len(zeta) else "–"))
         spread = result.param_spread
+        self.param_table.clearSpans()
+        undetermined = []
+        taps = "this tap" if n == 1 else "these taps"
         for r, (key, label, unit, fmt) in enumerate(PARAM_ROWS):
+            value = getattr(result.params, key)
             self.param_table.setItem(r, 0, _cell(label, Qt.AlignLeft | Qt.AlignVCenter))
-            self.param_table.setItem(r, 1, _cell(fmt.format(getattr(result.params, key))))
-            self.param_table.setItem(r, 2, _cell(fmt.format(spread[key])))
             self.param_table.setItem(r, 3, _cell(unit, Qt.AlignLeft | Qt.AlignVCenter))
+            if determined(value, spread[key]):
+                self.param_table.setItem(r, 1, _cell(number(value, fmt)))
+                self.param_table.setItem(r, 2, _cell(number(spread[key], fmt)))
+                continue
+            # A ± wider than the value would read as a measurement: say it in words.
+            item = _cell(NOT_DETERMINED, Qt.AlignCenter)
+            item.setForeground(QColor("#666666"))
+            item.setToolTip(f"Not determined by {taps}: best fit {number(value, fmt)} {unit}, but the "
+                            f"near-optimal fits spread ±{number(spread[key], fmt)}."
+                            + (" A second tap at another stick-out may pin it." if n == 1 else ""))
+            undetermined.append(label)
+            self.param_table.setItem(r, 1, item)
+            self.param_table.setItem(r, 2, None)
+            self.param_table.setSpan(r, 1, 1, 2)
         joint = "Joint fit of " + " and ".join(f"{i + 1}: {name}" for i, name in enumerate(names)) + ". "
         text = (joint if n > 1 else "") + (
             f"Objective {result.objective:.3g} after {result.evaluations:,} model evaluations "
             f"in {result.seconds:.1f} s; {len(result.param_sets)} near-optimal parameter sets.")
+        if undetermined:
+            text += (f" Not determined by {taps} (their fits spread more than their value): "
+                     f"{', '.join(undetermined)}.")
         if result.warnings:
             text += "\n⚠ " + "\n⚠ ".join(result.warnings)
         self.summary.setText(text)

@@ -1,9 +1,34 @@
-"""Small layout helpers shared by the views (side-by-side panes, read-only tables)."""
+"""Small layout helpers shared by the views (side-by-side panes, read-only tables, a label that gives way)."""
 
 from __future__ import annotations
 
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QSplitter, QTableWidget, QVBoxLayout, QWidget
+from PySide6.QtGui import QPainter
+from PySide6.QtWidgets import (
+    QAbstractItemView,
+    QHeaderView,
+    QLabel,
+    QSizePolicy,
+    QSplitter,
+    QTableWidget,
+    QVBoxLayout,
+    QWidget,
+)
+
+
+class ElidedLabel(QLabel):
+    """A one-line label that shortens its text in the middle ("er32_d16_tap.wav + er32…63.5mm_tap.wav")
+    when it has too little room, instead of cutting off the end; it never widens the window."""
+
+    def __init__(self, text: str = "", parent=None):
+        super().__init__(text, parent)
+        self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+
+    def paintEvent(self, event) -> None:
+        painter = QPainter(self)
+        rect = self.contentsRect()
+        shown = self.fontMetrics().elidedText(self.text(), Qt.ElideMiddle, rect.width())
+        painter.drawText(rect, int(self.alignment()), shown)
 
 
 def hsplit(left: QWidget, right: QWidget, stretch: tuple[int, int] = (1, 1)) -> QSplitter:

@@ -23,7 +23,6 @@ from PySide6.QtWidgets import (
     QCheckBox,
     QPushButton,
     QScrollArea,
-    QSizePolicy,
     QSplitter,
     QTabWidget,
     QVBoxLayout,
@@ -34,6 +33,7 @@ from taptune.gui.advice import Banner, second_tap_advice
 from taptune.gui.assembly_panel import AssemblyPanel
 from taptune.gui.check_view import CheckView
 from taptune.gui.fit_view import FitView
+from taptune.gui.layout import ElidedLabel
 from taptune.gui.library_view import LibraryView
 from taptune.gui.machine_view import MachineView
 from taptune.gui.messages import show_error
@@ -122,7 +122,7 @@ class MainWindow(QMainWindow):
     stream_factory, devices : optional
         Passed to the recording panel (tests use a fake input stream).
     settings : QSettings, optional
-        Where choices are remembered (the machine file); default: the user's settings.
+        Where choices are remembered (the machine file, the recordings folder); default: the user's settings.
     """
 
     analysis_ready = Signal(object)
@@ -161,7 +161,8 @@ class MainWindow(QMainWindow):
         self._identify_task = None
 
         self.assembly_panel = AssemblyPanel()
-        self.recorder = RecorderPanel(self._assembly_for_recording, stream_factory=stream_factory, devices=devices)
+        self.recorder = RecorderPanel(self._assembly_for_recording, stream_factory=stream_factory, devices=devices,
+                                      settings=settings)
         self.spectrum = SpectrumView()
         self.spectrum2 = SpectrumView()
         self.fit = FitView()
@@ -207,11 +208,9 @@ class MainWindow(QMainWindow):
         self.progress.setRange(0, 1000)
         self.progress.setTextVisible(True)
         self.progress.setFormat("")
-        self.file_label = QLabel("No recording")
-        self.file_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
         # Two long file names must not widen the window past a laptop screen: the label
-        # gives way (the tooltip has the names in full).
-        self.file_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+        # shortens them in the middle, keeping both ends (the tooltip has the paths in full).
+        self.file_label = ElidedLabel("No recording")
         self.file_label.setMinimumWidth(120)
         self.open_button.clicked.connect(self._open_dialog)
         self.open2_button.clicked.connect(self._open_second_dialog)
@@ -637,10 +636,11 @@ class MainWindow(QMainWindow):
         (the band 20 mm further out, 0.2 s) runs after the fitted view is up; the banner
         shows only if no newer identification has replaced this one meanwhile."""
 
-        def show(text) -> None:
-            if text and self.identification is result:
-                self.banner.show_text(text)
-            emit(self.advice_ready, text or "")
+        def show(advice) -> None:
+            line, details = advice or ("", "")
+            if line and self.identification is result:
+                self.banner.show_text(line, details)
+            emit(self.advice_ready, line)
 
         def failed(message: str) -> None:
             self.statusBar().showMessage(f"No second-tap advice: {message}", 8000)

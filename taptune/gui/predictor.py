@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib.ticker import FuncFormatter
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import QGridLayout, QLabel, QTableWidgetItem, QVBoxLayout, QWidget
 
@@ -53,6 +54,15 @@ def compute_prediction(source: PredictorSource, stickout_mm: float, freq_hz=FREQ
                          identified=list(source.identified), measured_modes=source.measured_modes)
     h = tip_receptance(build_model(assembly, options), source.param_sets[0], freq_hz)
     return stickout_mm, prediction, np.asarray(h)
+
+
+def plain_odds(coverage: float) -> str:
+    """A coverage probability in a machinist's words: 0.9 → "9 times in 10"."""
+    for n in (10, 20, 100):
+        k = coverage * n
+        if abs(k - round(k)) < 1e-6:
+            return f"{round(k)} times in {n}"
+    return f"{100 * coverage:.0f} times in 100"
 
 
 class Predictor(QWidget):
@@ -166,8 +176,10 @@ class Predictor(QWidget):
         fig.clear()
         with self.canvas.styled():
             ax = fig.add_subplot(111)
-            mag = np.abs(h)
+            mag = np.abs(h) * 1e6  # µm/N, as the Machine view's tool-point FRF
             ax.semilogy(FREQ_HZ / 1e3, mag, color=MEASURED, lw=1.2)
+            # Plain numbers on the log axis (0.01, 0.1, 1 …), not powers of ten.
+            ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
             for n, (f, s) in enumerate(zip(prediction.bending_hz, prediction.bending_hz_spread)):
                 ax.axvspan((f - s) / 1e3, (f + s) / 1e3, color=BENDING, alpha=0.25, lw=0)
                 ax.axvline(f / 1e3, color=BENDING, lw=0.8, ls=":")
@@ -178,9 +190,9 @@ class Predictor(QWidget):
             elastic = mag[FREQ_HZ > 0.5 * prediction.bending_hz[0]]
             ax.set_ylim(0.5 * elastic.min(), 4 * elastic.max())
             ax.set_xlabel("frequency [kHz]")
-            ax.set_ylabel("|H| [m/N]")
-            ax.set_title(f"Free-free tip receptance at stick-out {stickout_mm:.1f} mm (best-fit parameters; "
-                         "shaded: f1–f3 ± band)", loc="left")
+            ax.set_ylabel("|H| at the tool tip, hanging free [µm/N]")
+            ax.set_title(f"Tip receptance hanging free (as tapped) at stick-out {stickout_mm:.1f} mm; "
+                         "shaded: f1–f3 ± band", loc="left")
         self.canvas.draw_idle()
         emit(self.predicted, prediction)
 
@@ -200,12 +212,19 @@ class Predictor(QWidget):
                 self.band_table.setItem(r, c, item)
         parts = ", ".join(f"{GEOMETRY_PARTS.get(name, name)} ±{max(v):,.0f}"
                           for name, v in band.geometry_parts_hz.items())
-        recordings = ("no recorded identification" if band.recordings == 0
-                      else f"{band.recordings} recording{'s' if band.recordings != 1 else ''}")
+        rel = 100 * band.relative(prediction.bending_hz)
+        source = ("from 1 recording" if band.recordings == 1 else
+                  "from no recorded identification" if band.recordings == 0 else f"from {band.recordings} recordings")
+        # For the machinist: what the ± promises, in words; how it is made and calibrated on hover.
         self.band_note.setText(
-            f"{band.text(prediction.bending_hz)} Each ± = √(fits² + geometry² + model form²); the holder from "
-            f"{recordings}" + (f"; geometry, largest over f1–f3 [Hz]: {parts}" if parts else "")
-            + f". Calibration: {band.calibration}.")
+            f"The ± holds the true frequency {plain_odds(band.coverage)} on holders that differ from the "
+            f"model as real ones do. Here it is ±{rel.min():.1f}–{rel.max():.1f} % (holder {source}). "
+            "Hover for how it is made.")
+        details = (f"{band.text(prediction.bending_hz)}\nEach ± = √(fits² + geometry² + model form²)"
+                   + (f"; geometry, largest over f1–f3 [Hz]: {parts}" if parts else "")
+                   + f".\nCalibration: {band.calibration}.")
+        self.band_note.setToolTip(details)
+        self.band_table.setToolTip(details)
 
     def shutdown(self) -> None:
         self._updates.shutdown()

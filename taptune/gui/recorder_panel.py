@@ -33,6 +33,20 @@ from PySide6.QtWidgets import (
 from taptune.gui.signals import emit
 
 METER_FLOOR_DB = -80.0
+#: Where the folder last recorded into is remembered (QSettings).
+FOLDER_KEY = "record/folder"
+
+
+def default_recordings_folder() -> Path:
+    """A folder of the user's for new recordings: ``taptune-recordings`` in their Documents (else home).
+
+    Not the program's own folder: an installed taptune may not be writable, and a user's
+    recordings belong with their files.
+    """
+    from PySide6.QtCore import QStandardPaths
+
+    documents = QStandardPaths.writableLocation(QStandardPaths.DocumentsLocation)
+    return Path(documents or Path.home()) / "taptune-recordings"
 
 
 def recording_name(holder_name: str | None, stickout_mm: float | None, when: float | None = None) -> str:
@@ -107,6 +121,9 @@ class RecorderPanel(QWidget):
         Stream factory handed to the Recorder (tests pass a fake stream's factory).
     devices : callable, optional
         Returns the input devices (default :func:`taptune.io.recording.input_devices`).
+    settings : QSettings, optional
+        Where the folder last recorded into is remembered (default: the user's settings);
+        without one remembered, :func:`default_recordings_folder`.
 
     Signals
     -------
@@ -117,8 +134,11 @@ class RecorderPanel(QWidget):
     recorded = Signal(str)
     status = Signal(str)
 
-    def __init__(self, assembly_source, stream_factory=None, devices=None, parent=None):
+    def __init__(self, assembly_source, stream_factory=None, devices=None, settings=None, parent=None):
         super().__init__(parent)
+        from PySide6.QtCore import QSettings
+
+        self.settings = settings if settings is not None else QSettings()
         self._assembly_source = assembly_source
         self.stream_factory = stream_factory
         self._devices_fn = devices
@@ -134,7 +154,9 @@ class RecorderPanel(QWidget):
         self.taps.setRange(1, 50)
         self.taps.setValue(5)
         self.taps.setMaximumWidth(90)
-        self.folder = QLineEdit(str(Path.cwd() / "recordings"))
+        self.folder = QLineEdit(str(self.settings.value(FOLDER_KEY, "") or default_recordings_folder()))
+        self.folder.setToolTip("Each recording (WAV) and its assembly file are saved here; "
+                               "the folder is made when the first tap is saved")
         browse = QPushButton("Browse…")
         browse.clicked.connect(self._browse)
 
@@ -226,6 +248,7 @@ class RecorderPanel(QWidget):
         folder = QFileDialog.getExistingDirectory(self, "Save recordings into", self.folder.text())
         if folder:
             self.folder.setText(folder)
+            self.settings.setValue(FOLDER_KEY, folder)
 
     # ------------------------------------------------------------------ recording
 
@@ -246,7 +269,9 @@ class RecorderPanel(QWidget):
         assembly, toml_text = self._assembly_source()
         holder = assembly.holder.name if assembly is not None else None
         stickout = assembly.stickout * 1e3 if assembly is not None else None
-        out = Path(self.folder.text()).expanduser() / recording_name(holder, stickout)
+        folder = Path(self.folder.text().strip() or default_recordings_folder()).expanduser()
+        self.settings.setValue(FOLDER_KEY, str(folder))  # typed in: remembered too
+        out = folder / recording_name(holder, stickout)
         try:
             settings = TriggerSettings(sample_rate=int(device.default_samplerate) or 48000,
                                        channels=1, n_taps=self.taps.value())

@@ -60,8 +60,12 @@ def test_open_identify_save_and_predict(qtbot, window, generated_recording, libr
     with qtbot.waitSignal(window.advice_ready, timeout=30000) as advised:
         pass
     expected = second_tap_advice(result, window.assembly_panel.assembly)
-    assert advised.args == [expected or ""]
+    assert advised.args == [expected[0] if expected else ""]
     assert window.banner.isVisible() == bool(expected)
+    if expected:  # one line over the views; the details on demand
+        assert window.banner.text.text() == expected[0] and not window.banner.details.isVisible()
+        window.banner.details_button.click()
+        assert window.banner.details.isVisible() and window.banner.details.text() == expected[1]
 
     # A library that cannot be written: a message, and the identification is kept.
     blocker_file = library_path.parent / "not-a-folder"
@@ -182,7 +186,15 @@ def test_library_holder_predicts_with_the_panel_tool(qtbot, window, library_path
     assert band.half_width_hz[0] == pytest.approx(np.sqrt(band.set_hz[0] ** 2 + band.geometry_hz[0] ** 2
                                                           + band.model_form_hz[0] ** 2), rel=1e-9)
     assert view.band_table.item(0, 3).text() == f"{band.geometry_hz[0]:,.0f}"
-    assert f"Calibration: {band.calibration}" in view.band_note.text()
+    # What the ± promises in a machinist's words; how it was calibrated on hover.
+    assert view.band_note.text().startswith("The ± holds the true frequency 9 times in 10 on holders")
+    assert "Calibration" not in view.band_note.text()
+    assert f"Calibration: {band.calibration}" in view.band_note.toolTip()
+    # The receptance in µm/N, as the Machine view's tool-point FRF.
+    ax = view.canvas.figure.axes[0]
+    assert "[µm/N]" in ax.get_ylabel() and ax.get_yscale() == "log"
+    peak = ax.lines[0].get_ydata()[np.argmin(np.abs(ax.lines[0].get_xdata() - prediction.bending_hz[0] / 1e3))]
+    assert 0.1 < peak < 100  # µm/N: a tool tip hanging free at its first bending mode, not m/N
 
 
 def test_an_assembly_edit_analyses_again_without_reading_the_file_again(qtbot, window, generated_recording,

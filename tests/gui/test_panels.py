@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QImage
 
 from taptune.gui import messages
@@ -13,13 +14,17 @@ from taptune.gui import messages
 def test_pick_holder_and_tool_from_assets_and_edit(qtbot, window):
     panel = window.assembly_panel
     labels = [panel.holder_combo.itemText(i) for i in range(panel.holder_combo.count())]
-    er32 = next(i for i, t in enumerate(labels) if t.startswith("ER32 collet chuck") and "d16" in t)
+    er32 = labels.index("ER32 collet chuck HSK-A63 x 100")  # the name alone, its file in the tooltip
+    assert panel.holder_combo.itemData(er32, Qt.ToolTipRole) == "from assets/er32_hsk63_d16.toml"
     tools = [panel.tool_combo.itemText(i) for i in range(panel.tool_combo.count())]
     d16 = next(i for i, t in enumerate(tools) if "D16" in t)
+    # Headings group the entries and cannot be picked.
+    heading = labels.index("— examples —")
+    assert not panel.holder_combo.model().item(heading).isEnabled()
     with qtbot.waitSignal(panel.assembly_changed):
         panel.holder_combo.setCurrentIndex(er32)
         panel.holder_combo.activated.emit(er32)
-    assert panel.assembly is None and "Choose a tool" in panel.message.text()
+    assert panel.assembly is None and "Still missing: a tool, the stick-out." in panel.message.text()
     panel.stickout.setValue(53.5)
     panel.tool_combo.setCurrentIndex(d16)
     panel.tool_combo.activated.emit(d16)
@@ -72,7 +77,9 @@ def test_library_view_import_export_remove(qtbot, window, library_path, tmp_path
     assert view.table.rowCount() == 1 and "ER32" in view.details.toPlainText()
     # The holder is offered in the assembly panel too.
     panel = window.assembly_panel
-    assert any(panel.holder_combo.itemText(i).startswith("library: ER32") for i in range(panel.holder_combo.count()))
+    labels = [panel.holder_combo.itemText(i) for i in range(panel.holder_combo.count())]
+    assert labels[1:3] == ["— holder library —", "ER32 collet chuck HSK-A63 x 100"]
+    assert panel.holder_combo.itemData(2, Qt.ToolTipRole) == "from the holder library"
     out = tmp_path / "export.json"
     assert view.export_to(out) == 1
     assert json.loads(out.read_text())["holders"]
@@ -162,3 +169,18 @@ def test_without_a_display_the_window_is_not_opened_invisibly(monkeypatch, capsy
     monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
     assert main(["gui"]) == 1
     assert "no display" in capsys.readouterr().err
+
+
+def test_holder_and_tool_names_are_not_cut_off_on_a_laptop_screen(qtbot, window):
+    from PySide6.QtWidgets import QStyle, QStyleOptionComboBox
+
+    panel = window.assembly_panel  # the window is 1366x768
+    qtbot.waitExposed(window)
+    for combo in (panel.holder_combo, panel.tool_combo):
+        option = QStyleOptionComboBox()
+        combo.initStyleOption(option)
+        room = combo.style().subControlRect(QStyle.CC_ComboBox, option, QStyle.SC_ComboBoxEditField, combo).width()
+        names = [combo.itemText(i) for i in range(1, combo.count())]
+        widest = max(combo.fontMetrics().horizontalAdvance(n) for n in names)
+        assert widest <= room, f"{max(names, key=combo.fontMetrics().horizontalAdvance)!r} needs {widest} px of {room}"
+        assert combo.view().minimumWidth() >= widest  # the open list too

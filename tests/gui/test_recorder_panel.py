@@ -135,3 +135,23 @@ def test_record_the_second_stickout(qtbot, library_path, settings, tmp_path, gen
     assert win.identify_button.text() == "Identify both together" and win.identify_button.isEnabled()
     assert messages.history == []
     win.close()
+
+
+def test_recordings_go_to_a_user_folder_and_the_last_folder_is_remembered(qtbot, settings, tmp_path, monkeypatch):
+    from PySide6.QtCore import QStandardPaths
+
+    from taptune.gui.recorder_panel import FOLDER_KEY, RecorderPanel
+
+    documents = tmp_path / "Documents"
+    monkeypatch.setattr(QStandardPaths, "writableLocation", lambda _where: str(documents))
+    panel = RecorderPanel(lambda: (None, None), devices=lambda: DEVICES, settings=settings)
+    qtbot.addWidget(panel)
+    # Not the program's folder: the user's documents.
+    assert panel.folder.text() == str(documents / "taptune-recordings")
+    chosen = tmp_path / "shop floor taps"
+    monkeypatch.setattr("PySide6.QtWidgets.QFileDialog.getExistingDirectory", lambda *a, **k: str(chosen))
+    panel._browse()
+    assert settings.value(FOLDER_KEY) == str(chosen)
+    again = RecorderPanel(lambda: (None, None), devices=lambda: DEVICES, settings=settings)
+    qtbot.addWidget(again)
+    assert again.folder.text() == str(chosen)

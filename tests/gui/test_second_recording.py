@@ -95,7 +95,8 @@ def test_advice_asks_for_a_second_tap_only_when_the_bands_are_wide(reference_ass
     # which a tap at that stick-out shrinks: the advice comes.
     exact = dataclasses.replace(reference_assembly, tolerances=Tolerances(0.0, 0.0, 0.0))
     tight = SimpleNamespace(param_sets=(best,), relative_floor=5e-4)
-    assert "At 73.5 mm" in second_tap_advice(tight, exact)
+    line, details = second_tap_advice(tight, exact)
+    assert "at 73.5 mm" in line and "At 73.5 mm" in details
     # With a second recording at that stick-out (a joint fit) there is nothing to advise.
     from taptune.identify.bands import second_tap_advice as advice_in_words
     from taptune.identify.pipeline import transfer_outlook
@@ -106,8 +107,9 @@ def test_advice_asks_for_a_second_tap_only_when_the_bands_are_wide(reference_ass
     loose = SimpleNamespace(param_sets=(best, HolderParams(**{**HOLDER_A, "k_rr": 3 * HOLDER_A["k_rr"],
                                                             "k_tt": HOLDER_A["k_tt"] / 3})),
                             relative_floor=5e-4)
-    text = second_tap_advice(loose, exact)
-    assert "At 73.5 mm" in text and "2nd stick-out" in text and "what one tap cannot tell apart" in text
+    line, details = second_tap_advice(loose, exact)
+    assert line.startswith("One tap leaves other stick-outs loose (±") and "tap again at about 73.5 mm" in line
+    assert "At 73.5 mm" in details and "2nd stick-out" in details and "what one tap cannot tell apart" in details
 
 
 def test_banner_offers_the_second_tap(qtbot, window, monkeypatch):

@@ -1,0 +1,40 @@
+"""Numbers and dates as the views print them: no negative zero, no ± wider than the value it qualifies, one date form.
+
+A difference that rounds to zero prints ``0.00 %``, not ``-0.00 %`` (which reads as a
+real, if tiny, error). A parameter whose spread over the near-optimal fits is larger than
+its value is not determined by the tap: a ± there would suggest a measurement that was
+not made, so the views say so in words and keep the numbers in a tooltip.
+"""
+
+from __future__ import annotations
+
+import math
+
+#: Shown instead of "value ± spread" when the spread exceeds the value (a table cell;
+#: the surrounding text says "by this tap").
+NOT_DETERMINED = "not determined"
+
+
+def number(value: float, spec: str) -> str:
+    """``format(value, spec)`` with the sign dropped where the printed number is zero.
+
+    ``spec`` is a format spec (``"+.2f"``) or a template with one field (``"{:.3g}"``).
+
+    >>> number(-0.0004, "+.2f"), number(0.0, "+.2f"), number(-0.013, "+.2f")
+    ('0.00', '0.00', '-0.01')
+    """
+    text = spec.format(value) if spec.startswith("{") else format(value, spec)
+    mantissa = text.lstrip("+-").split("e")[0].split("E")[0]
+    if text[:1] in "+-" and not any(c in "123456789" for c in mantissa):
+        return text[1:]
+    return text
+
+
+def determined(value: float, spread: float) -> bool:
+    """Whether the tap fixes ``value``: its spread over the near-optimal fits is no larger than it."""
+    return math.isfinite(value) and math.isfinite(spread) and abs(spread) <= abs(value)
+
+
+def date_text(iso: str) -> str:
+    """A stored UTC time (``2026-11-27T08:21:49Z``) as every view shows it: ``2026-11-27 08:21:49``."""
+    return iso.replace("T", " ").rstrip("Z")
