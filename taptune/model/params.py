@@ -8,7 +8,8 @@ intensities), see :func:`to_p` and :func:`from_p`.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+import math
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -47,7 +48,8 @@ class HolderParams:
         return self.k_rr * 1e3 * (1 + 1j * self.eta_rr * ETA_REFERENCE_MM)
 
     def to_dict(self) -> dict:
-        return {k: float(v) for k, v in asdict(self).items()}
+        # Not dataclasses.asdict: its deep copy made saving a large holder library slow.
+        return {k: float(getattr(self, k)) for k in NAMES}
 
     @classmethod
     def from_dict(cls, data: dict, source: str = "<params>") -> "HolderParams":
@@ -60,7 +62,7 @@ class HolderParams:
         values = {}
         for k in NAMES:
             v = data[k]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not _finite(v):
                 raise InputError(f"{source}: parameter {k} must be a finite number, got {v!r}")
             values[k] = float(v)
         for k in ("k_tt", "k_rr", "density_factor", "modulus_factor"):
@@ -78,6 +80,13 @@ class HolderParams:
             if not lo <= values[k] <= hi:
                 raise InputError(f"{source}: parameter {k} = {values[k]:g} is not plausible (expected {lo:g} … {hi:g})")
         return cls(**values)
+
+
+def _finite(v) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer beyond any float
+        return False
 
 
 # Medians of five published holders (MODEL.md §8.1), used when nothing else is known.

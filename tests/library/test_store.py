@@ -13,7 +13,7 @@ import pytest
 
 from taptune.errors import InputError, LibraryError
 from taptune.library import HolderLibrary, LibraryFormatError, UnknownHolderError, default_library_path
-from taptune.library import store
+from taptune.library import json_store, store
 from tests.library.entries import make_entry, make_record
 
 REPO = Path(__file__).resolve().parents[2]
@@ -141,14 +141,14 @@ def test_default_path_is_the_user_data_folder(monkeypatch, tmp_path):
     monkeypatch.delenv("TAPTUNE_LIBRARY", raising=False)
     monkeypatch.setattr(store.sys, "platform", "linux")
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
-    assert default_library_path() == tmp_path / "xdg" / "taptune" / "holders.json"
+    assert default_library_path() == tmp_path / "xdg" / "taptune" / "holders.db"
     monkeypatch.setenv("XDG_DATA_HOME", "relative/ignored")
-    assert default_library_path() == Path.home() / ".local" / "share" / "taptune" / "holders.json"
+    assert default_library_path() == Path.home() / ".local" / "share" / "taptune" / "holders.db"
     monkeypatch.setattr(store.sys, "platform", "darwin")
-    assert default_library_path() == Path.home() / "Library" / "Application Support" / "taptune" / "holders.json"
+    assert default_library_path() == Path.home() / "Library" / "Application Support" / "taptune" / "holders.db"
     monkeypatch.setattr(store.sys, "platform", "win32")
     monkeypatch.setenv("APPDATA", str(tmp_path / "Roaming"))
-    assert default_library_path() == tmp_path / "Roaming" / "taptune" / "holders.json"
+    assert default_library_path() == tmp_path / "Roaming" / "taptune" / "holders.db"
 
 
 # --------------------------------------------------------------------------- atomicity
@@ -209,7 +209,7 @@ def test_failure_while_encoding_leaves_the_old_file_intact(lib, monkeypatch):
     def broken_encoder(entries, source):
         raise RuntimeError("simulated failure in json.dumps")
 
-    monkeypatch.setattr(store, "encode", broken_encoder)
+    monkeypatch.setattr(json_store, "encode", broken_encoder)
     with pytest.raises(RuntimeError):
         lib.put(make_entry("B"))
     assert lib.path.read_bytes() == before
