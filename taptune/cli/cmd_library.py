@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from datetime import datetime
 
 #: ``library show`` lists this many of the latest checks.
 SHOW_CHECKS = 5
@@ -83,7 +82,9 @@ def run(args) -> int:
 
 def _date(iso: str | None) -> str:
     """``2026-11-22 12:38`` from an ISO-8601 UTC date ('' when there is none)."""
-    return datetime.fromisoformat(iso).strftime("%Y-%m-%d %H:%M") if iso else ""
+    from taptune.library.schema import date_label
+
+    return date_label(iso)
 
 
 def _hz(values) -> str:

@@ -115,12 +115,14 @@ class CheckView(QWidget):
 
 def checks_html(entry) -> str:
     """The holder's check history as list items, newest first, each verdict in its colour."""
+    from taptune.library.schema import date_label
+
     e = html.escape
     items = []
     for c in reversed(getattr(entry, "checks", ())):
         colour = VERDICTS.get(c.verdict, ("#555555",))[0]
         measured = ", ".join(f"{m['measured_hz']:,.0f}" if m.get("measured_hz") is not None else "—"
                              for m in c.modes)
-        items.append(f"<li>{e(c.date.replace('T', ' ').rstrip('Z'))}: <b style='color:{colour}'>{e(c.verdict)}</b>"
+        items.append(f"<li>{e(date_label(c.date))}: <b style='color:{colour}'>{e(c.verdict)}</b>"
                      f" — {e(c.recording)}, {e(c.tool)} at {c.stickout_mm:g} mm, f = {measured} Hz</li>")
     return "".join(items) or "<li>none yet: open a tap of this holder and press Check</li>"

@@ -368,6 +368,11 @@ def utc_now() -> str:
     return datetime.now(timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
 
 
+def date_label(iso: str | None) -> str:
+    """``2026-11-22 12:38`` (UTC) from an ISO-8601 UTC date: how every list and view shows dates ('' for None)."""
+    return datetime.fromisoformat(iso).strftime("%Y-%m-%d %H:%M") if iso else ""
+
+
 def sha256_file(path: str | Path) -> str:
     """Hex SHA-256 of a file's bytes (identifies a recording whatever its name)."""
     digest = hashlib.sha256()
