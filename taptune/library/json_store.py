@@ -27,7 +27,7 @@ from taptune.errors import LibraryError
 from taptune.io.atomic import atomic_write_bytes, check_writable, remove_stale_temporaries
 from taptune.library.exchange import read_library_file
 from taptune.library.schema import HolderEntry, encode
-from taptune.library.store import HolderLibrary, HolderSummary, Transaction, matches
+from taptune.library.base import HolderLibrary, HolderSummary, Transaction, matches, register
 
 _LOCK_POLL_S = 0.02
 
@@ -199,3 +199,6 @@ class JsonLibrary(HolderLibrary):
     def _transaction(self):
         with self.edit() as holders:
             yield _DictTransaction(holders)
+
+
+register("json", JsonLibrary)

@@ -36,8 +36,8 @@ from urllib.parse import urlsplit, urlunsplit
 
 from taptune.errors import InputError, LibraryError
 from taptune.library.schema import SCHEMA, VERSION, HolderEntry, LibraryFormatError, decode, library_version, utc_now
-from taptune.library.store import (OLD_FILE_NAME, SUGGESTION_POOL, HolderLibrary, HolderSummary, Transaction,
-                                   is_server_url)
+from taptune.library.base import (OLD_FILE_NAME, SUGGESTION_POOL, HolderLibrary, HolderSummary, Transaction,
+                                   is_server_url, register)
 
 #: Version of the tables (not of the holder documents, which carry the file format's version).
 SCHEMA_VERSION = 1
@@ -635,8 +635,8 @@ class PostgresLibrary(SqlLibrary):
         self._local.conn = None
 
     def _existing_tables(self, cursor) -> list[str]:
-        cursor.execute("SELECT table_name FROM information_schema.tables WHERE table_schema = current_schema() "
-                       "ORDER BY table_name")
+        # pg_tables lists every table; information_schema only those this user may use.
+        cursor.execute("SELECT tablename FROM pg_tables WHERE schemaname = current_schema() ORDER BY tablename")
         return [r[0] for r in cursor.fetchall()]
 
     @contextmanager
@@ -679,3 +679,7 @@ class PostgresLibrary(SqlLibrary):
             cursor.execute(f"SET LOCAL lock_timeout = '{int(self.lock_timeout * 1000)}ms'")
             cursor.execute("SELECT pg_advisory_xact_lock(%s)", (PG_LOCK_KEY,))
             yield _SqlTransaction(self, cursor)
+
+
+register("sqlite", SqliteLibrary)
+register("postgresql", PostgresLibrary)

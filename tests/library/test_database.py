@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from taptune.errors import InputError, LibraryError
-from taptune.library import HolderLibrary, LibraryFormatError, UnknownHolderError, default_library_path, store
+from taptune.library import HolderLibrary, LibraryFormatError, UnknownHolderError, base, default_library_path
 from taptune.library import exchange
 from taptune.library.exchange import export_entries
 from taptune.library.schema import CheckRecord
@@ -107,7 +107,7 @@ def test_summaries_match_case_insensitively_with_limit_and_offset(db):
 
 
 def test_did_you_mean_works_beyond_the_suggestion_pool(db, monkeypatch):
-    monkeypatch.setattr(store, "SUGGESTION_POOL", 4)
+    monkeypatch.setattr(base, "SUGGESTION_POOL", 4)
     monkeypatch.setattr("taptune.library.sql_store.SUGGESTION_POOL", 4)
     for i in range(12):
         db.put(make_entry(f"filler {i:02d}", records=0))
@@ -285,7 +285,7 @@ def test_kill_9_while_saving_loses_no_finished_save(db_location):
 
 def test_old_default_json_library_is_taken_over_once_with_everything(tmp_path, monkeypatch, capsys):
     monkeypatch.delenv("TAPTUNE_LIBRARY", raising=False)
-    monkeypatch.setattr(store.sys, "platform", "linux")
+    monkeypatch.setattr(base.sys, "platform", "linux")
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
     old = tmp_path / "xdg" / "taptune" / "holders.json"
     json_lib = HolderLibrary(old)
@@ -352,3 +352,18 @@ def test_reading_a_file_in_pieces_gives_what_reading_it_whole_does(tmp_path, chu
         (tmp_path / "b.json").write_text(bad)
         with pytest.raises(LibraryFormatError, match=problem):
             list(exchange.iter_library_file(tmp_path / "b.json", chunk=chunk))
+
+
+def test_a_server_user_without_rights_gets_one_line_and_no_empty_library(postgres_server):
+    from tests.library.pg import fresh_database
+
+    url = postgres_server.url(fresh_database(postgres_server))
+    HolderLibrary(url).put(make_entry("A"))
+    postgres_server.admin("DO $$ BEGIN IF NOT EXISTS (SELECT FROM pg_roles WHERE rolname = 'stranger') "
+                          "THEN CREATE ROLE stranger LOGIN; END IF; END $$")
+    stranger = url.replace("taptune_admin@", "stranger@")
+    for action in (lambda lib: lib.names(), lambda lib: lib.put(make_entry("B"))):
+        with pytest.raises(LibraryError, match="permission denied for table taptune_library") as info:
+            action(HolderLibrary(stranger))
+        assert str(info.value).startswith("postgresql://stranger@") and "\n" not in str(info.value)
+    assert HolderLibrary(url).names() == ["A"]
