@@ -179,6 +179,13 @@ class LibraryView(QWidget):
             self._library = HolderLibrary(self.library_path)
         return self._library
 
+    @property
+    def location(self) -> str:
+        """The library as shown to the user (a server address without its password)."""
+        from taptune.library.sql_store import redacted
+
+        return redacted(str(self.library_path))
+
     def set_library(self, path) -> None:
         from taptune.library.store import default_library_path
 
@@ -222,8 +229,7 @@ class LibraryView(QWidget):
             self.error = str(err)
             show_error(self, "Cannot read the holder library", self.error)
         broken = " (cannot be read)" if self.error is not None else ""
-        location = getattr(self._library, "location", self.library_path)
-        self.path_label.setText(f"Holder library: {location}{broken}")
+        self.path_label.setText(f"Holder library: {self.location}{broken}")
         self._show_page()
         self.table.blockSignals(True)
         self.table.setRowCount(len(self.entries))

@@ -8,6 +8,7 @@ from taptune.gui import library_view
 from taptune.gui.library_view import LibraryView
 from taptune.library import HolderLibrary
 from tests.library.entries import make_entry
+from tests.library.pg import postgres_server  # noqa: F401  (fixture)
 
 
 @pytest.fixture
@@ -72,3 +73,15 @@ def test_long_names_and_the_last_check_fit_at_1366_px(qtbot, tmp_path):
     metrics = view.table.fontMetrics()
     assert widths[0] >= metrics.horizontalAdvance(name)  # the whole name
     assert sum(widths) <= view.table.viewport().width() + 1  # the last column is not cut off
+
+
+def test_a_server_library_is_shown_without_its_password(qtbot, postgres_server):
+    from tests.library.pg import PASSWORD, PASSWORD_ROLE, fresh_database
+
+    url = postgres_server.tcp_url(fresh_database(postgres_server, owner=PASSWORD_ROLE))
+    HolderLibrary(url).put(make_entry("on the server"))
+    view = LibraryView(url)
+    qtbot.addWidget(view)
+    assert list(view.entries) == ["on the server"]
+    assert PASSWORD not in view.path_label.text() and PASSWORD not in view.location
+    assert view.path_label.text().startswith(f"Holder library: postgresql://{PASSWORD_ROLE}:***@127.0.0.1:")
