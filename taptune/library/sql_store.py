@@ -26,15 +26,15 @@ import json
 import os
 import re
 import sqlite3
+import sys
 import threading
-import time
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Iterator
 from urllib.parse import urlsplit, urlunsplit
 
 from taptune.errors import InputError, LibraryError
+from taptune.io.atomic import fsync_dir
 from taptune.library.schema import SCHEMA, VERSION, HolderEntry, LibraryFormatError, decode, library_version, utc_now
 from taptune.library.base import (OLD_FILE_NAME, SUGGESTION_POOL, HolderLibrary, HolderSummary, Transaction,
                                    is_server_url, register)
@@ -522,6 +522,7 @@ class SqliteLibrary(SqlLibrary):
                 for suffix in ("-wal", "-shm"):
                     Path(str(tmp) + suffix).unlink(missing_ok=True)
                 os.replace(tmp, self.path)
+                fsync_dir(self.path.parent)  # the database is in place before the JSON file moves
             except BaseException:
                 staging.close()
                 for suffix in ("", "-wal", "-shm"):
@@ -531,9 +532,8 @@ class SqliteLibrary(SqlLibrary):
             os.replace(old, backup)
         self.notice = (f"taptune: took over the holder library {old} ({len(holders)} holders) into {self.path}; "
                        f"the JSON file is kept as {backup}")
-        import sys
-
         print(self.notice, file=sys.stderr)
+
 
 
 # --------------------------------------------------------------------------- PostgreSQL
