@@ -21,7 +21,7 @@ from taptune.batch.records import AUDIO_SUFFIXES, BatchOptions, Item, Row, first
 from taptune.errors import InputError
 from taptune.io.assembly import assembly_beside, load_assembly
 from taptune.library.schema import sha256_file
-from taptune.library.store import HolderLibrary, default_library_path
+from taptune.library.store import HolderLibrary, default_library_path, library_files
 
 
 # ----------------------------------------------------------------------------- discovery
@@ -196,17 +196,24 @@ def _group(items: Sequence[Item], joint: bool) -> list[tuple[Item, ...]]:
     return [tuple(g) for g in groups.values()]
 
 
-def _library_entries(options: BatchOptions) -> dict:
-    """The library's holders (empty if there is none yet); a broken library stops the batch up front."""
-    return HolderLibrary(default_library_path(options.library)).entries()
+def _library_entries(options: BatchOptions, items: Sequence[Item]) -> dict:
+    """The library's holders that these recordings identified before (none if there is no library yet);
+    a broken library stops the batch up front. Only those holders are read, not the whole library."""
+    library = HolderLibrary(default_library_path(options.library))
+    try:
+        library.check_writable()
+        return library.with_recordings({i.sha256 for i in items})
+    finally:
+        library.close()
 
 
 def _protect_library(items: Sequence[Item], options: BatchOptions) -> None:
     """Refuse up front a result JSON that would land on the holder library file (even with
     --no-save: ``holders.wav`` with ``--out`` the library's folder would replace the library)."""
-    library = default_library_path(options.library).resolve()
+    files = library_files(default_library_path(options.library))  # none for a server
+    library = files[0].resolve() if files else None
     for item in items:
-        if item.json_path.resolve() == library:
+        if library is not None and item.json_path.resolve() == library:
             raise InputError(f"{item.json_path}: is the holder library; the result of {item.path} would "
                              "overwrite it; choose another --out folder")
 
@@ -228,7 +235,7 @@ def plan(paths: Sequence[str | os.PathLike], options: BatchOptions, assembly: st
     items, bad = _prepare(files, assembly, Path(options.out_dir))
     _protect_library(items, options)
     rows += bad
-    entries = _library_entries(options) if options.save and not options.force else {}
+    entries = _library_entries(options, items) if options.save and not options.force else {}
     jobs = []
     for group in _group(items, options.joint):
         hashes = frozenset(i.sha256 for i in group)

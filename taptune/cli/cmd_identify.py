@@ -120,12 +120,10 @@ def run(args) -> int:
         output_path(path, what, library=args.library, inputs=inputs)
     recordings, assemblies = load_inputs(args.wav, args.assembly)
     if library is not None:
-        from taptune.io.atomic import check_writable
         from taptune.library.store import HolderLibrary
 
         # A broken or unwritable library is reported before the fit, not after it.
-        HolderLibrary(library).entries()
-        check_writable(library)
+        HolderLibrary(library).check_writable()
     bar = ProgressBar("identify")
     try:
         analyses, result = run_identification(recordings, assemblies, args.seed, args.jobs, bar)

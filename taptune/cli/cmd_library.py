@@ -1,8 +1,9 @@
 """``taptune library list | show NAME | export OUT | import FILE | remove NAME | receptance NAME``.
 
-The holder library file is ``--library PATH`` (accepted before or after the action), else
-``$TAPTUNE_LIBRARY``, else the user data folder. A broken library file, an unknown holder
-or a bad file to import exits 2 with one line naming the file; the library is never
+The holder library is ``--library PATH|URL`` (accepted before or after the action), else
+``$TAPTUNE_LIBRARY``, else ``holders.db`` in the user data folder: an SQLite database, a
+``postgresql://`` server or a ``.json`` file. A broken library, an unknown holder or a bad
+file to import exits 2 with one line naming the library or file; the library is never
 overwritten when it is broken, and ``import`` never executes or unpickles anything.
 """
 
@@ -10,25 +11,30 @@ from __future__ import annotations
 
 import argparse
 import sys
-from datetime import datetime
 
 #: ``library show`` lists this many of the latest checks.
 SHOW_CHECKS = 5
-LIBRARY_HELP = "holder library file (default: $TAPTUNE_LIBRARY, else the user data folder)"
+LIBRARY_HELP = ("holder library: a .db file, a postgresql:// URL or a .json file "
+                "(default: $TAPTUNE_LIBRARY, else holders.db in the user data folder)")
+#: ``library list`` shows at most this many holders unless --limit says otherwise.
+LIST_LIMIT = 1000
 
 
 def add_parser(sub, name: str, help_text: str) -> argparse.ArgumentParser:
     p = sub.add_parser(name, help=help_text, description=help_text + ".")
-    p.add_argument("--library", metavar="PATH", default=None, help=LIBRARY_HELP)
+    p.add_argument("--library", metavar="PATH|URL", default=None, help=LIBRARY_HELP)
     actions = p.add_subparsers(dest="action", metavar="ACTION", required=True)
 
     def action(action_name: str, text: str) -> argparse.ArgumentParser:
         a = actions.add_parser(action_name, help=text, description=text + ".")
         # SUPPRESS: an action's own default must not overwrite a --library given before it.
-        a.add_argument("--library", metavar="PATH", default=argparse.SUPPRESS, help=LIBRARY_HELP)
+        a.add_argument("--library", metavar="PATH|URL", default=argparse.SUPPRESS, help=LIBRARY_HELP)
         return a
 
-    a = action("list", "list the holders: interface, stiffnesses, identifications")
+    a = action("list", "list the holders: interface, stiffnesses, identifications, last check")
+    a.add_argument("--match", metavar="TEXT", help="only holders whose name contains TEXT (any case)")
+    a.add_argument("--limit", type=int, default=LIST_LIMIT, metavar="N",
+                   help=f"show at most N holders (default {LIST_LIMIT}; 0 for all)")
     a.add_argument("--json", metavar="OUT", help="also write the list as JSON ('-' for stdout only)")
 
     a = action("show", "one holder: parameters with spread, history, last checks, predicted bending modes")
@@ -65,7 +71,10 @@ def run(args) -> int:
     from taptune.library import HolderLibrary, default_library_path
 
     lib = HolderLibrary(default_library_path(args.library))
-    return _ACTIONS[args.action](lib, args)
+    try:
+        return _ACTIONS[args.action](lib, args)
+    finally:
+        lib.close()
 
 
 # --------------------------------------------------------------------------- formatting
@@ -73,7 +82,9 @@ def run(args) -> int:
 
 def _date(iso: str | None) -> str:
     """``2026-11-22 12:38`` from an ISO-8601 UTC date ('' when there is none)."""
-    return datetime.fromisoformat(iso).strftime("%Y-%m-%d %H:%M") if iso else ""
+    from taptune.library.schema import date_label
+
+    return date_label(iso)
 
 
 def _hz(values) -> str:
@@ -93,32 +104,38 @@ def _warn(entries) -> None:
 
 def _list(lib, args) -> int:
     from taptune.cli.common import format_table, write_json
+    from taptune.errors import InputError
 
-    entries = lib.entries()
-    _warn(entries.values())
-    rows = [
-        {
-            "name": e.name,
-            "interface": e.interface,
-            "k_tt": e.params.k_tt,
-            "k_rr": e.params.k_rr,
-            "identifications": len(e.identifications),
-            "last_identified": e.last_identified,
-        }
-        for e in entries.values()
-    ]
-    write_json({"library": str(lib.path), "holders": rows}, args.json)
+    if args.limit < 0:
+        raise InputError(f"--limit must be 0 (all) or more, got {args.limit}")
+    limit = args.limit or None
+    rows = lib.summaries(match=args.match, limit=limit)
+    total = len(rows) if limit is None or len(rows) < limit else lib.count(args.match)
+    for r in rows:
+        for w in r.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+    write_json({"library": lib.location, "match": args.match, "total": total,
+                "holders": [r.to_dict() for r in rows]}, args.json)
     if args.json == "-":
         return 0
     if not rows:
-        print(f"{lib.path}: no holders yet (taptune identify saves one; taptune library import adds a file)")
+        if args.match and total == 0 and lib.count():
+            print(f"{lib.location}: no holder name contains {args.match!r}")
+        else:
+            print(f"{lib.location}: no holders yet (taptune identify saves one; taptune library import adds a file)")
         return 0
     table = [
-        [r["name"], r["interface"], f"{r['k_tt']:.3g}", f"{r['k_rr']:.3g}", str(r["identifications"]), _date(r["last_identified"])]
+        [r.name, r.interface, f"{r.k_tt:.3g}", f"{r.k_rr:.3g}", str(r.identifications), _date(r.last_identified),
+         f"{r.last_verdict} {_date(r.last_checked)}" if r.last_verdict else ""]
         for r in rows
     ]
-    print(format_table(table, ["name", "interface", "k_tt [N/m/mm]", "k_rr [N*m/rad/mm]", "identified", "last (UTC)"]))
-    print(f"{len(rows)} holder{'s' if len(rows) != 1 else ''} in {lib.path}")
+    print(format_table(table, ["name", "interface", "k_tt [N/m/mm]", "k_rr [N*m/rad/mm]", "identified", "last (UTC)",
+                               "last check (UTC)"]))
+    what = f" whose name contains {args.match!r}" if args.match else ""
+    shown = f"{len(rows)} of {total:,} holders{what}" if total > len(rows) else \
+        f"{len(rows)} holder{'s' if len(rows) != 1 else ''}{what}"
+    more = " (--limit N shows more, --match TEXT fewer)" if total > len(rows) else ""
+    print(f"{shown} in {lib.location}{more}")
     return 0
 
 
@@ -148,7 +165,7 @@ def _show_lines(lib, entry, predictions) -> list[str]:
     options = ", ".join(f"{k}={v}" for k, v in entry.model_options.items()) or "(defaults)"
     lines = [
         entry.name,
-        f"  library    {lib.path}",
+        f"  library    {lib.location}",
         f"  interface  {entry.interface}",
         f"  holder     {length:g} mm long, clamp length {h['clamp_length']:g} mm, {len(h['segments'])} segments, "
         f"{h['material']['density']:g} kg/m³, {h['material']['youngs_modulus']:g} GPa",
@@ -197,7 +214,7 @@ def _show(lib, args) -> int:
     entry = lib.get(args.name)
     _warn([entry])
     predictions = None if args.no_predict else _predictions(entry)
-    data = {"library": str(lib.path), "holder": entry.to_dict(), "spread": entry.spread()}
+    data = {"library": lib.location, "holder": entry.to_dict(), "spread": entry.spread()}
     if predictions is not None:
         data["predictions"] = predictions
     write_json(data, args.json)
@@ -214,7 +231,7 @@ def _export(lib, args) -> int:
     fmt = args.format or ("csv" if args.out.lower().endswith(".csv") else "json")
     refuse_library_output(args.out, "export", args.library, protect=(lib.path,))
     count = export_library(lib, args.out, fmt)
-    print(f"exported {count} holder{'s' if count != 1 else ''} from {lib.path} to {args.out} ({fmt})")
+    print(f"exported {count} holder{'s' if count != 1 else ''} from {lib.location} to {args.out} ({fmt})")
     return 0
 
 
@@ -228,7 +245,7 @@ def _import(lib, args) -> int:
 
 def _remove(lib, args) -> int:
     entry = lib.remove(args.name)
-    print(f"removed holder '{entry.name}' from {lib.path}")
+    print(f"removed holder '{entry.name}' from {lib.location}")
     return 0
 
 

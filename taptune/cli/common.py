@@ -71,7 +71,7 @@ def _same_file(a: Path, b: Path) -> bool:
 
 
 def refuse_library_output(path: str | os.PathLike | None, what: str, library=None, protect=()) -> None:
-    """Refuse an output file that is a holder library file (or its lock): one place for every command.
+    """Refuse an output file that is a holder library file (or its lock or journal): one place for every command.
 
     Parameters
     ----------
@@ -89,13 +89,13 @@ def refuse_library_output(path: str | os.PathLike | None, what: str, library=Non
     Raises
     ------
     InputError
-        ``path`` is one of those libraries or its ``.lock`` file.
+        ``path`` is one of those libraries or its ``.lock``, ``-wal``, ``-shm`` or ``-journal`` file.
     """
     if path is None or str(path) == "-":
         return
-    from taptune.library.store import default_library_path
+    from taptune.library.store import default_library_path, library_files
 
-    libraries = [Path(p) for p in protect if p]
+    libraries = [p for p in protect if p]
     for arg in dict.fromkeys((library or None, None)):  # the given library, then the default one
         try:
             libraries.append(default_library_path(arg))
@@ -103,10 +103,12 @@ def refuse_library_output(path: str | os.PathLike | None, what: str, library=Non
             pass  # no home folder (a container's bare user): there is no default library to protect
     target = Path(path)
     for lib in libraries:
-        if _same_file(target, lib):
+        files = library_files(lib)  # none for a server
+        if files and _same_file(target, files[0]):
             raise InputError(f"{path}: is the holder library; writing the {what} there would destroy it")
-        if _same_file(target, lib.with_name(lib.name + ".lock")):
-            raise InputError(f"{path}: is the holder library's lock file; choose another name for the {what}")
+        if any(_same_file(target, f) for f in files[1:]):
+            raise InputError(f"{path}: is a file of the holder library ({files[0].name}'s lock or journal); "
+                             f"choose another name for the {what}")
 
 
 # Outputs whose writer has one format whatever the name (matplotlib PNG, PdfPages PDF).

@@ -1,17 +1,23 @@
-"""Library view: list, inspect, export, import and remove holders — the same calls as ``taptune library``."""
+"""Library view: search, list, inspect, export, import and remove holders — the same calls as ``taptune library``.
+
+The table shows one page of holders (:data:`PAGE_SIZE`) whose name contains the search
+text, read from the library a page at a time, so a shop's library of thousands of
+holders opens as fast as a small one.
+"""
 
 from __future__ import annotations
 
 import html
 from pathlib import Path
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QAbstractItemView,
     QFileDialog,
     QHBoxLayout,
     QHeaderView,
     QLabel,
+    QLineEdit,
     QMessageBox,
     QPushButton,
     QTableWidget,
@@ -27,7 +33,13 @@ from taptune.gui.layout import hsplit
 from taptune.gui.messages import show_error, show_info
 from taptune.gui.signals import emit
 
-COLUMNS = ("holder", "interface", "identifications", "last identified", "last check")
+from taptune.library.schema import date_label
+
+COLUMNS = ("holder", "interface", "identified", "last identified", "last check")
+#: Holders per page of the table (each read whole: parameters and history for the details).
+PAGE_SIZE = 100
+#: Milliseconds of quiet typing before the search runs.
+SEARCH_DELAY_MS = 250
 
 
 def entry_html(entry) -> str:
@@ -42,7 +54,7 @@ def entry_html(entry) -> str:
     )
     segments = ", ".join(f"{s['length']:g}×Ø{s['od']:g}/{s['id']:g}" for s in h.get("segments", []))
     history = "".join(
-        f"<li>{e(r.date)}: {e(r.recording)}, {e(r.tool_name)} at {r.stickout_mm:g} mm, "
+        f"<li>{e(date_label(r.date))}: {e(r.recording)}, {e(r.tool_name)} at {r.stickout_mm:g} mm, "
         f"f = {', '.join(f'{f:,.0f}' for f in r.bending_measured_hz)} Hz, objective {r.objective:.3g}</li>"
         for r in entry.identifications
     )
@@ -82,11 +94,30 @@ class LibraryView(QWidget):
         self.path_label = QLabel()
         self.path_label.setTextInteractionFlags(Qt.TextSelectableByMouse)
         self.path_label.setWordWrap(True)
+        self.search = QLineEdit()
+        self.search.setPlaceholderText("Search holders by name…")
+        self.search.setClearButtonEnabled(True)
+        self._search_timer = QTimer(self)
+        self._search_timer.setSingleShot(True)
+        self._search_timer.setInterval(SEARCH_DELAY_MS)
+        self._search_timer.timeout.connect(self._new_search)
+        self.search.textChanged.connect(lambda _text: self._search_timer.start())
+        self.search.returnPressed.connect(self._new_search)
+        self.page_label = QLabel()
+        self.previous_button = QPushButton("◀ Previous")
+        self.next_button = QPushButton("Next ▶")
+        self.previous_button.clicked.connect(lambda: self._turn(-1))
+        self.next_button.clicked.connect(lambda: self._turn(+1))
         self.table = QTableWidget(0, len(COLUMNS))
         self.table.setHorizontalHeaderLabels([c.capitalize() for c in COLUMNS])
-        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeToContents)
-        self.table.horizontalHeader().setSectionResizeMode(0, QHeaderView.Stretch)
+        header = self.table.horizontalHeader()
+        header.setSectionResizeMode(QHeaderView.ResizeToContents)
+        header.setSectionResizeMode(0, QHeaderView.Stretch)
+        header.setMinimumSectionSize(40)
         self.table.verticalHeader().setVisible(False)
+        self.table.verticalHeader().setDefaultSectionSize(self.table.fontMetrics().height() + 8)  # more rows per page
+        self.table.setWordWrap(False)
+        self.table.setTextElideMode(Qt.ElideMiddle)  # a long name keeps its start and its end
         self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
         self.table.setSelectionMode(QAbstractItemView.SingleSelection)
         self.table.setEditTriggers(QAbstractItemView.NoEditTriggers)
@@ -109,73 +140,141 @@ class LibraryView(QWidget):
             self.buttons[key] = button
             row.addWidget(button)
         row.addStretch(1)
+        paging = QHBoxLayout()
+        paging.addWidget(self.search, 1)
+        paging.addWidget(self.page_label)
+        paging.addWidget(self.previous_button)
+        paging.addWidget(self.next_button)
+        left = QWidget()
+        left_layout = QVBoxLayout(left)
+        left_layout.setContentsMargins(0, 0, 0, 0)
+        left_layout.addLayout(paging)
+        left_layout.addWidget(self.table, 1)
 
-        split = hsplit(self.table, self.details)
+        # The table gets the larger share: names of 40 characters and five columns at 1366 px.
+        split = hsplit(left, self.details, stretch=(5, 3))
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.path_label)
         layout.addLayout(row)
         layout.addWidget(split, 1)
+        #: The holders of the page shown, by name (whole entries: the pickers and the details use them).
         self.entries: dict = {}
-        # Why the library file cannot be read (one line naming the file), or None.
+        #: How many holders match the search; the first shown is number ``offset + 1``.
+        self.total = 0
+        self.offset = 0
+        # Why the library cannot be read (one line naming it), or None.
         self.error: str | None = None
+        self._library = None
         self.set_library(library_path)
 
     # ------------------------------------------------------------------ state
 
     @property
     def library(self):
+        """The open library (one store, its connection kept while the view shows it)."""
         from taptune.library import HolderLibrary
 
-        return HolderLibrary(self.library_path)
+        if self._library is None:
+            self._library = HolderLibrary(self.library_path)
+        return self._library
+
+    @property
+    def location(self) -> str:
+        """The library as shown to the user (a server address without its password)."""
+        from taptune.library.sql_store import redacted
+
+        return redacted(str(self.library_path))
 
     def set_library(self, path) -> None:
-        self.library_path = Path(path)
+        from taptune.library.store import default_library_path
+
+        if self._library is not None:
+            self._library.close()
+            self._library = None
+        self.library_path = default_library_path(str(path))
+        self.offset = 0
+        self.refresh()
+
+    @property
+    def match(self) -> str:
+        """The search text (holders whose name contains it, in any case)."""
+        return self.search.text().strip()
+
+    def _new_search(self) -> None:
+        self._search_timer.stop()
+        self.offset = 0
+        self.refresh()
+
+    def _turn(self, pages: int) -> None:
+        self.offset = max(0, min(self.offset + pages * PAGE_SIZE, max(self.total - 1, 0) // PAGE_SIZE * PAGE_SIZE))
         self.refresh()
 
     def refresh(self) -> None:
-        """Re-read the library file (a broken file is reported, never overwritten).
+        """Re-read the page shown (a broken library is reported, never overwritten).
 
-        A file that cannot be read leaves :attr:`error` set, and the view and a dialog say why.
+        A library that cannot be read leaves :attr:`error` set, and the view and a dialog say why.
         """
         from taptune.errors import TaptuneError
 
+        selected = self.selected()
         try:
-            self.entries = self.library.entries()
+            self.total = self.library.count(self.match)
+            if self.offset >= self.total:
+                self.offset = max(self.total - 1, 0) // PAGE_SIZE * PAGE_SIZE
+            self.entries = self.library.page(self.match, limit=PAGE_SIZE, offset=self.offset)
             self.error = None
         except TaptuneError as err:
-            self.entries = {}
+            self.entries, self.total = {}, 0
             self.error = str(err)
             show_error(self, "Cannot read the holder library", self.error)
         broken = " (cannot be read)" if self.error is not None else ""
-        self.path_label.setText(f"Holder library: {self.library_path}{broken}")
+        self.path_label.setText(f"Holder library: {self.location}{broken}")
+        self._show_page()
+        self.table.blockSignals(True)
         self.table.setRowCount(len(self.entries))
         for r, entry in enumerate(self.entries.values()):
             checks = getattr(entry, "checks", ())
             values = (entry.name, entry.interface, str(len(entry.identifications)),
-                      (entry.last_identified or "–").replace("T", " ").rstrip("Z"),
-                      checks[-1].verdict if checks else "–")
+                      date_label(entry.last_identified) or "–", checks[-1].verdict if checks else "–")
             for c, text in enumerate(values):
                 item = QTableWidgetItem(text)
+                if c == 0:
+                    item.setToolTip(entry.name)
+                if c == 4 and checks:
+                    item.setToolTip(f"{date_label(checks[-1].date)} UTC: {checks[-1].verdict}")
                 if entry.warnings:
                     item.setToolTip("\n".join(entry.warnings))
                     if c == 0:
                         item.setText(f"⚠ {text}")
                 self.table.setItem(r, c, item)
+        self.table.blockSignals(False)
         if self.error is not None:
             # Not "empty": the holders may all be in the file, which a repair brings back.
             self.details.setHtml(
                 f"<p style='color:#b00020'>{html.escape(self.error)}</p>"
-                "<p>Nothing is saved into this file while it cannot be read. Repair it (or restore "
+                "<p>Nothing is saved into this library while it cannot be read. Repair it (or restore "
                 "a copy) and open it again, or open another library.</p>")
+        elif not self.entries and self.match:
+            self.details.setHtml(f"<p>No holder name contains “{html.escape(self.match)}”.</p>")
         elif not self.entries:
             self.details.setHtml("<p>The library is empty: identify a holder and save it, or import a library file.</p>")
-        elif self.table.currentRow() < 0:
-            self.table.selectRow(0)
+        elif selected is not None and selected.name in self.entries:
+            self.select(selected.name)  # the same holder may hold newer data (a check, a new identification)
+            self._selected()
         else:
-            self._selected()  # the same row may hold newer data (a check, a new identification)
+            self.table.selectRow(0)
         self._update_buttons()
         emit(self.changed, self.entries)
+
+    def _show_page(self) -> None:
+        shown = len(self.entries)
+        if self.total == 0:
+            self.page_label.setText("no holders" if not self.match else "no match")
+        else:
+            self.page_label.setText(f"{self.offset + 1:,}–{self.offset + shown:,} of {self.total:,}")
+        self.previous_button.setEnabled(self.offset > 0)
+        self.next_button.setEnabled(self.offset + shown < self.total)
 
     def selected(self):
         """The selected entry, or None."""
@@ -184,7 +283,14 @@ class LibraryView(QWidget):
         return self.entries[names[row]] if 0 <= row < len(names) else None
 
     def select(self, name: str) -> None:
+        """Select holder ``name``; if it is not on the page shown, search for it first."""
         names = list(self.entries)
+        if name not in names and name:
+            self.search.blockSignals(True)
+            self.search.setText(name)
+            self.search.blockSignals(False)
+            self._new_search()
+            names = list(self.entries)
         if name in names:
             self.table.selectRow(names.index(name))
 
@@ -198,7 +304,7 @@ class LibraryView(QWidget):
         has = self.selected() is not None
         for key in ("predict", "machine", "remove"):
             self.buttons[key].setEnabled(has)
-        self.buttons["export"].setEnabled(bool(self.entries))
+        self.buttons["export"].setEnabled(self.total > 0)
 
     # ------------------------------------------------------------------ actions
 
@@ -220,7 +326,8 @@ class LibraryView(QWidget):
 
         format = format or ("csv" if str(path).lower().endswith(".csv") else "json")
         default = default_library_path()
-        if Path(path).expanduser().resolve() == default.expanduser().resolve() and default != self.library_path:
+        if (isinstance(default, Path) and Path(path).expanduser().resolve() == default.expanduser().resolve()
+                and default != self.library_path):
             # Exporting another library over the default one would replace the user's holders.
             show_error(self, "Export failed", f"{path}: is the holder library; exporting there would destroy it")
             return None
@@ -280,7 +387,8 @@ class LibraryView(QWidget):
         box.open()
 
     def _open_dialog(self) -> None:
-        path, _ = QFileDialog.getSaveFileName(self, "Open or create a holder library", str(self.library_path),
-                                              "Holder library (*.json)", options=QFileDialog.DontConfirmOverwrite)
+        start = str(self.library_path) if isinstance(self.library_path, Path) else ""
+        path, _ = QFileDialog.getSaveFileName(self, "Open or create a holder library", start,
+                                              "Holder library (*.db *.json)", options=QFileDialog.DontConfirmOverwrite)
         if path:
             self.set_library(path)

@@ -614,7 +614,7 @@ class MainWindow(QMainWindow):
                 f"Identified in {result.seconds:.1f} s. Save it to the library, or predict other stick-outs.")
         else:
             self.statusBar().showMessage(
-                f"Identified in {result.seconds:.1f} s. The holder library {self.library_view.library_path} "
+                f"Identified in {result.seconds:.1f} s. The holder library {self.library_view.location} "
                 "cannot be read (Library tab), so it cannot be saved there; predict other stick-outs.")
         self._update_actions()
         emit(self.identification_ready, result)
@@ -729,7 +729,7 @@ class MainWindow(QMainWindow):
             return None
         self.library_view.refresh()
         self.library_view.select(entry.name)
-        self.statusBar().showMessage(f"Saved {entry.name!r} to {self.library_view.library_path}.")
+        self.statusBar().showMessage(f"Saved {entry.name!r} to {self.library_view.location}.")
         emit(self.saved_to_library, entry.name)
         return entry.name
 

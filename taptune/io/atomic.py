@@ -20,7 +20,7 @@ from typing import Callable
 from taptune.errors import InputError, InterruptedAfterWrite
 
 
-def _fsync_dir(folder: Path) -> None:
+def fsync_dir(folder: Path) -> None:
     """Make a rename in ``folder`` durable (POSIX); Windows has no directory handles to sync."""
     if sys.platform == "win32":
         return
@@ -63,7 +63,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> None
         tmp.unlink(missing_ok=True)
         raise
     try:
-        _fsync_dir(path.parent)
+        fsync_dir(path.parent)
     finally:
         _release_interrupts(held, path)
 

@@ -4,7 +4,7 @@
 button. It takes a recording and an assembly (the caller reads those files), labels the
 tap with the holder's own parameters, predicts the assembly from the library, compares
 (:func:`taptune.identify.check.check_tap`) and appends a :class:`CheckRecord` to the
-holder under the library lock.
+holder in one library transaction.
 """
 
 from __future__ import annotations
@@ -143,8 +143,5 @@ def check_record(recording, assembly, result) -> CheckRecord:
 
 
 def append_check(lib: HolderLibrary, name: str, record: CheckRecord) -> None:
-    """Add ``record`` to holder ``name``'s checks in one locked, atomic update (nothing else changes)."""
-    with lib.edit() as holders:
-        if name not in holders:
-            lib.get(name)  # removed meanwhile: raises UnknownHolderError with close matches
-        holders[name] = replace(holders[name], checks=holders[name].checks + (record,))
+    """Add ``record`` to holder ``name``'s checks in one transaction (nothing else changes)."""
+    lib.update(name, lambda entry: replace(entry, checks=entry.checks + (record,)))

@@ -13,14 +13,16 @@
 
 Every file is written atomically (:func:`taptune.io.atomic.atomic_write`). The functions
 work on entries and files; those given a library (``lib``) use only its ``target``,
-``entries()`` and ``edit()``, so this module never imports :mod:`taptune.library.store`
-(the store imports it).
+``iter_entries()`` and ``_transaction()``, so this module never imports
+:mod:`taptune.library.store` (the stores import it).
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import itertools
+import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +31,7 @@ import numpy as np
 
 from taptune.errors import InputError, LibraryError
 from taptune.io.atomic import atomic_write, atomic_write_bytes
-from taptune.library.schema import (PARAM_UNITS, HolderEntry, LibraryFormatError, decode, encode, parse_library,
+from taptune.library.schema import (PARAM_UNITS, SCHEMA, HolderEntry, LibraryFormatError, decode, encode, parse_library,
                                     refuse_implausible)
 from taptune.model.params import NAMES
 
@@ -56,33 +58,185 @@ def read_library_file(path: str | os.PathLike, missing_ok: bool = False) -> dict
     return parse_library(decode(raw, str(path)), str(path))
 
 
+#: Library files up to this size are read whole (with line and column in a message);
+#: larger ones holder by holder, so importing a large export needs little memory.
+WHOLE_FILE_BYTES = 64 << 20
+_CHUNK = 1 << 20
+
+
+def iter_library_file(path: str | os.PathLike, chunk: int = _CHUNK):
+    """(name, entry) of every holder of a library file, validated one by one, in file order.
+
+    The same checks as :func:`read_library_file` (schema, version before any holder when
+    the file states it first, as exports do; strict JSON; no duplicate names), reading
+    the file in pieces: memory does not grow with the file. A problem raises
+    LibraryFormatError naming the file when it is reached, so a caller that writes while
+    iterating must do it in a transaction it can roll back.
+    """
+    from taptune.library.schema import VERSION, _reject_constant, _unique_keys
+
+    path = Path(path)
+    src = str(path)
+    decoder = json.JSONDecoder(object_pairs_hook=_unique_keys, parse_constant=_reject_constant)
+    try:
+        f = open(path, encoding="utf-8")
+    except FileNotFoundError:
+        raise LibraryFormatError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise LibraryFormatError(f"{path}: is a folder, not a holder library file") from None
+    except OSError as err:
+        raise LibraryFormatError(f"{path}: cannot read the holder library ({err.strerror})") from None
+    state = {"buf": "", "pos": 0, "eof": False, "offset": 0}
+
+    def more() -> bool:
+        if state["eof"]:
+            return False
+        try:
+            piece = f.read(chunk)
+        except UnicodeDecodeError:
+            raise LibraryFormatError(f"{path}: is not UTF-8 text, so not a holder library (JSON)") from None
+        if not piece:
+            state["eof"] = True
+            return False
+        state["offset"] += state["pos"]
+        state["buf"] = state["buf"][state["pos"]:] + piece
+        state["pos"] = 0
+        return True
+
+    def bad(what: str):
+        raise LibraryFormatError(f"{path}: is not valid JSON near character {state['offset'] + state['pos']} "
+                                 f"({what}); truncated or not a holder library")
+
+    def skip_ws() -> str:
+        while True:
+            buf, pos = state["buf"], state["pos"]
+            while pos < len(buf) and buf[pos] in " \t\r\n":
+                pos += 1
+            state["pos"] = pos
+            if pos < len(buf):
+                return buf[pos]
+            if not more():
+                return ""
+
+    def expect(chars: str) -> str:
+        c = skip_ws()
+        if not c or c not in chars:
+            bad(f"expected {' or '.join(repr(x) for x in chars)}, found {c!r}" if c else "ends too early")
+        state["pos"] += 1
+        return c
+
+    def value():
+        skip_ws()
+        while True:
+            try:
+                obj, end = decoder.raw_decode(state["buf"], state["pos"])
+            except json.JSONDecodeError as err:
+                if more():
+                    continue
+                bad(err.msg)
+            except (ValueError, RecursionError) as err:
+                bad(str(err))
+            if end == len(state["buf"]) and more():
+                continue  # a number may go on in the next piece
+            state["pos"] = end
+            return obj
+
+    def members(what: str):
+        """The keys of the object that starts here; the caller reads each value before the next key."""
+        expect("{")
+        first = True
+        while True:
+            c = expect('}"' if first else "},")
+            if c == "}":
+                return
+            if c == '"':
+                state["pos"] -= 1  # the key's opening quote: value() reads the key
+            elif skip_ws() != '"':
+                bad(f"expected {what}")
+            first = False
+            key = value()
+            expect(":")
+            yield key
+
+    with f:
+        if skip_ws() == "\ufeff":
+            state["pos"] += 1
+        if skip_ws() == "":
+            raise LibraryFormatError(f"{path}: is empty (truncated?), not a holder library")
+        head: dict = {}
+        names: set[str] = set()
+        for key in members("a key"):
+            if key in head or (key == "holders" and names):
+                raise LibraryFormatError(f"{path}: is not valid JSON (duplicate key {key!r})")
+            if key != "holders":
+                head[key] = value()
+                if key == "schema" and head[key] != SCHEMA:
+                    raise LibraryFormatError(f"{path}: is not a taptune holder library (schema {head[key]!r})")
+                if key == "version":
+                    parse_library({"schema": SCHEMA, "version": head[key], "holders": {}}, src)
+                elif key not in ("schema", "version"):
+                    raise LibraryFormatError(f"{path}: {key} is not a known key (allowed: schema, version, holders)")
+                continue
+            if "schema" not in head:
+                raise LibraryFormatError(f"{path}: is not a taptune holder library (no \"schema\": \"{SCHEMA}\" "
+                                         "key before its holders)")
+            head[key] = None
+            for name in members("a holder name"):
+                if name in names:
+                    raise LibraryFormatError(f"{path}: is not valid JSON (duplicate key {name!r})")
+                names.add(name)
+                where = f"{src}: holder {name!r}"
+                entry = HolderEntry.from_dict(value(), where)
+                if entry.name != name:
+                    raise LibraryFormatError(f"{where}: name {entry.name!r} differs from its key in \"holders\"")
+                yield name, entry
+        if skip_ws() != "":
+            bad("more after the end of the document")
+        missing = [k for k in ("schema", "version", "holders") if k not in head]
+        if missing:
+            raise LibraryFormatError(f"{path}: {missing[0]} is missing")
+        if not isinstance(head["version"], int) or head["version"] > VERSION:
+            parse_library({"schema": SCHEMA, "version": head["version"], "holders": {}}, src)
+
+
 # --------------------------------------------------------------------------- export
+
+
+def _csv_header() -> list[str]:
+    header = ["name", "interface"]
+    for k in NAMES:
+        header += [f"{k} [{PARAM_UNITS[k]}]", f"{k}_spread [{PARAM_UNITS[k]}]"]
+    return header + ["param_sets", "holder_length [mm]", "clamp_length [mm]", "identifications", "last_identified"]
+
+
+def _csv_line(row: list) -> str:
+    out = io.StringIO()
+    csv.writer(out, lineterminator="\n").writerow(row)
+    return out.getvalue()
+
+
+_CSV_HEADER_LINE = _csv_line(_csv_header())
+
+
+def library_csv_row(e: HolderEntry) -> str:
+    """The CSV line of one holder (see :func:`library_csv`)."""
+    spread = e.spread()
+    row = [e.name, e.interface]
+    for k in NAMES:
+        row += [repr(getattr(e.params, k)), repr(spread[k])]
+    row += [
+        len(e.param_sets),
+        repr(sum(s["length"] for s in e.holder["segments"])),
+        repr(e.holder["clamp_length"]),
+        len(e.identifications),
+        e.last_identified or "",
+    ]
+    return _csv_line(row)
 
 
 def library_csv(entries: dict[str, HolderEntry]) -> str:
     """One CSV row per holder: parameters and their ± half-width spreads, geometry, history."""
-    header = ["name", "interface"]
-    for k in NAMES:
-        header += [f"{k} [{PARAM_UNITS[k]}]", f"{k}_spread [{PARAM_UNITS[k]}]"]
-    header += ["param_sets", "holder_length [mm]", "clamp_length [mm]", "identifications", "last_identified"]
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(header)
-    for name in sorted(entries):
-        e = entries[name]
-        spread = e.spread()
-        row = [e.name, e.interface]
-        for k in NAMES:
-            row += [repr(getattr(e.params, k)), repr(spread[k])]
-        row += [
-            len(e.param_sets),
-            repr(sum(s["length"] for s in e.holder["segments"])),
-            repr(e.holder["clamp_length"]),
-            len(e.identifications),
-            e.last_identified or "",
-        ]
-        writer.writerow(row)
-    return out.getvalue()
+    return _CSV_HEADER_LINE + "".join(library_csv_row(entries[name]) for name in sorted(entries))
 
 
 def export_library(lib, out: str | os.PathLike, format: str = "json") -> int:
@@ -97,12 +251,36 @@ def export_library(lib, out: str | os.PathLike, format: str = "json") -> int:
     format : {"json", "csv"}
         ``"json"``: the library file format (:func:`import_library` reads it back to the
         same entries). ``"csv"``: a table for spreadsheets; it cannot be imported.
+
+    A JSON library is written from its entries at once; a database is streamed holder by
+    holder (:meth:`iter_entries`), so the export of a large library needs little memory,
+    and the bytes are those :func:`export_entries` would write.
     """
     _check_format(format)
     out = Path(out)
-    if Path(os.path.realpath(out)) == lib.target:
+    if lib.target is not None and Path(os.path.realpath(out)) == lib.target:
         raise InputError(f"{out}: is the library being exported; choose another file")
-    return export_entries(lib.entries(), out, format)
+    if not hasattr(lib, "export_version"):
+        return export_entries(lib.entries(), out, format)
+    count = 0
+
+    def write(tmp: Path) -> None:
+        nonlocal count
+        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+            if format == "csv":
+                f.write(_CSV_HEADER_LINE)
+                for _, entry in lib.iter_entries():
+                    f.write(library_csv_row(entry))
+                    count += 1
+                return
+            f.write(library_document_head(lib.export_version()))
+            for name, entry in lib.iter_entries():
+                f.write((",\n" if count else "\n") + holder_json(name, entry))
+                count += 1
+            f.write(("\n  }" if count else "}") + "\n}\n")
+
+    _write_output(out, lambda: atomic_write(out, write))
+    return count
 
 
 def export_entries(entries: dict[str, HolderEntry], out: str | os.PathLike, format: str = "json") -> int:
@@ -115,6 +293,18 @@ def export_entries(entries: dict[str, HolderEntry], out: str | os.PathLike, form
         data = library_csv(entries).encode("utf-8")
     _write_output(out, lambda: atomic_write_bytes(out, data))
     return len(entries)
+
+
+def library_document_head(version: int) -> str:
+    """The start of a library JSON document up to the opening brace of ``holders`` (as :func:`encode` writes it)."""
+    head = json.dumps({"schema": SCHEMA, "version": version, "holders": {}}, indent=2)
+    return head[: head.rindex("{}") + 1]
+
+
+def holder_json(name: str, entry: HolderEntry) -> str:
+    """One ``"name": {...}`` member of ``holders``, indented as :func:`encode` writes it."""
+    body = json.dumps(entry.to_dict(), indent=2, ensure_ascii=False, allow_nan=False).replace("\n", "\n    ")
+    return "    " + json.dumps(name, ensure_ascii=False) + ": " + body
 
 
 def _check_format(format: str) -> None:
@@ -197,22 +387,49 @@ class ImportReport:
 
 
 def import_library(lib, file: str | os.PathLike, replace: bool = False) -> ImportReport:
-    """Merge the holders of a library file into ``lib`` (a HolderLibrary), under its lock.
+    """Merge the holders of a library file into ``lib`` (a HolderLibrary) in one transaction.
 
-    The whole file is validated first; geometry that would enter the library (a new holder,
-    or a replacing one with other geometry) must also be within the assembly file's
-    plausible ranges (else refused, naming the holder). An invalid file changes nothing. See
-    :func:`merge_entries` for what happens to each holder.
+    Every holder is validated; geometry that would enter the library (a new holder, or a
+    replacing one with other geometry) must also be within the assembly file's plausible
+    ranges (else refused, naming the holder). An invalid file changes nothing: a small
+    file is validated whole before the transaction, a large one (over
+    :data:`WHOLE_FILE_BYTES`, into a database) holder by holder inside it, and the
+    transaction is rolled back at the first problem. See :func:`merge_entries` for what
+    happens to each holder; only the holders it adds or changes are written.
     """
-    theirs = read_library_file(file)
-    with lib.edit() as holders:
-        for name, entry in theirs.items():
-            # A read keeps an implausible holder (with a warning); the library takes no new
-            # one, but one it already holds unchanged (an export of itself) is no reason to refuse.
-            current = holders.get(name)
-            if current is None or (replace and current.holder != entry.holder):
-                refuse_implausible(entry, f"{file}: holder {name!r}", "nothing was imported")
-        return merge_entries(holders, theirs, replace, source=str(file))
+    try:
+        size = os.path.getsize(file)
+    except OSError:
+        size = 0
+    streamed = size > WHOLE_FILE_BYTES and hasattr(lib, "export_version")
+    holders = iter_library_file(file) if streamed else iter(read_library_file(file).items())
+    parts: list[ImportReport] = []
+    with lib._transaction() as tx:
+        while True:
+            batch = dict(itertools.islice(holders, 1000))
+            if not batch:
+                break
+            parts.append(_merge_batch(tx, batch, replace, file))
+    return ImportReport(str(file), *(tuple(sorted(n for p in parts for n in getattr(p, k)))
+                                     for k in ("added", "merged", "skipped")),
+                        tuple(sorted((c for p in parts for c in p.conflicts), key=lambda c: c.name)),
+                        bool(replace and any(p.conflicts for p in parts)))
+
+
+def _merge_batch(tx, theirs: dict[str, HolderEntry], replace: bool, file) -> ImportReport:
+    current = tx.load_many(sorted(theirs))
+    for name, entry in theirs.items():
+        # A read keeps an implausible holder (with a warning); the library takes no new
+        # one, but one it already holds unchanged (an export of itself) is no reason to refuse.
+        mine = current.get(name)
+        if mine is None or (replace and mine.holder != entry.holder):
+            refuse_implausible(entry, f"{file}: holder {name!r}", "nothing was imported")
+    merged = dict(current)
+    report = merge_entries(merged, theirs, replace, source=str(file))
+    for name, entry in merged.items():
+        if current.get(name) != entry:
+            tx.store(entry)
+    return report
 
 
 def merge_entries(holders: dict[str, HolderEntry], theirs: dict[str, HolderEntry], replace: bool, source: str) -> ImportReport:

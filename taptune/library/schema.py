@@ -90,6 +90,7 @@ PARAM_UNITS = {
 }
 
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
+_CONTROL = re.compile(r"[\x00-\x1f]")
 _MAX_NAME = NAME_MAX_LEN  # what an assembly file may name
 
 
@@ -157,7 +158,7 @@ def _integer(value, src: str, key: str, lo: int = 0) -> int:
 def _text(value, src: str, key: str, max_len: int = 1000) -> str:
     if not isinstance(value, str) or not value.strip():
         _fail(src, key, f"must be a non-empty string, got {value!r}")
-    if len(value) > max_len or any(ord(c) < 32 for c in value):
+    if len(value) > max_len or _CONTROL.search(value):
         _fail(src, key, f"must be one line of at most {max_len} characters, got {value[:60]!r}")
     return value
 
@@ -299,7 +300,9 @@ def check_params(value, src: str, key: str) -> HolderParams:
     """Validate the seven holder parameters (exactly the keys of :data:`NAMES`)."""
     _object(value, src, key, NAMES)
     for k in NAMES:
-        _number(value[k], src, f"{key}.{k}")
+        v = value[k]
+        if type(v) is not float or not math.isfinite(v):  # the usual case passes without a call
+            _number(v, src, f"{key}.{k}")
     try:
         return HolderParams.from_dict(value, f"{src}: {key}")
     except InputError as err:
@@ -363,6 +366,11 @@ def tool_from_dict(data: dict, source: str = "<library>") -> Tool:
 def utc_now() -> str:
     """The current time as ISO-8601 UTC to the second, e.g. ``2026-11-22T12:38:49Z``."""
     return datetime.now(timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+
+
+def date_label(iso: str | None) -> str:
+    """``2026-11-22 12:38`` (UTC) from an ISO-8601 UTC date: how every list and view shows dates ('' for None)."""
+    return datetime.fromisoformat(iso).strftime("%Y-%m-%d %H:%M") if iso else ""
 
 
 def sha256_file(path: str | Path) -> str:
@@ -834,11 +842,12 @@ def _reject_constant(name: str):
 
 
 def _unique_keys(pairs):
-    keys = [k for k, _ in pairs]
-    if len(set(keys)) != len(keys):
+    out = dict(pairs)
+    if len(out) != len(pairs):
+        keys = [k for k, _ in pairs]
         dup = next(k for k in keys if keys.count(k) > 1)
         raise ValueError(f"duplicate key {dup!r}")
-    return dict(pairs)
+    return out
 
 
 def decode(raw: bytes, source: str) -> object:
@@ -890,14 +899,19 @@ def parse_library(data, source: str) -> dict[str, HolderEntry]:
     return out
 
 
+def library_version(entries) -> int:
+    """The oldest library format version that holds these entries (see :data:`VERSION`)."""
+    entries = list(entries)
+    stated = any(r.stickout_tolerance_mm is not None for entry in entries for r in entry.identifications)
+    with_checks = any(entry.checks for entry in entries)
+    return VERSION if stated else VERSION_WITH_CHECKS if with_checks else VERSION_WITHOUT_CHECKS
+
+
 def library_document(entries: dict[str, HolderEntry]) -> dict:
     """The JSON document of a library (holders sorted by name, for stable diffs)."""
-    stated = any(r.stickout_tolerance_mm is not None for entry in entries.values() for r in entry.identifications)
-    with_checks = any(entry.checks for entry in entries.values())
-    version = VERSION if stated else VERSION_WITH_CHECKS if with_checks else VERSION_WITHOUT_CHECKS
     return {
         "schema": SCHEMA,
-        "version": version,
+        "version": library_version(entries.values()),
         "holders": {name: entries[name].to_dict() for name in sorted(entries)},
     }
 

@@ -8,7 +8,8 @@ intensities), see :func:`to_p` and :func:`from_p`.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+import math
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -47,7 +48,8 @@ class HolderParams:
         return self.k_rr * 1e3 * (1 + 1j * self.eta_rr * ETA_REFERENCE_MM)
 
     def to_dict(self) -> dict:
-        return {k: float(v) for k, v in asdict(self).items()}
+        # Not dataclasses.asdict: its deep copy made saving a large holder library slow.
+        return {k: float(getattr(self, k)) for k in NAMES}
 
     @classmethod
     def from_dict(cls, data: dict, source: str = "<params>") -> "HolderParams":
@@ -60,24 +62,37 @@ class HolderParams:
         values = {}
         for k in NAMES:
             v = data[k]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not _finite(v):
                 raise InputError(f"{source}: parameter {k} must be a finite number, got {v!r}")
             values[k] = float(v)
-        for k in ("k_tt", "k_rr", "density_factor", "modulus_factor"):
-            if values[k] <= 0:
-                raise InputError(f"{source}: parameter {k} must be > 0, got {values[k]:g}")
-        for k in ("eta_tt", "eta_rr"):
-            if values[k] < 0:
-                raise InputError(f"{source}: parameter {k} must be >= 0, got {values[k]:g}")
-        if abs(values["alpha"]) >= 100:
-            raise InputError(f"{source}: parameter alpha must lie in (-100, 100) %, got {values['alpha']:g}")
-        # Two decades beyond the search space (docs/physics.md §2) is still a holder; far beyond
-        # it the matrices overflow or lose all precision.
-        for k, lo, hi in (("k_tt", 1e2, 1e12), ("k_rr", 1.0, 1e7), ("eta_tt", 0.0, 1.0), ("eta_rr", 0.0, 1.0),
-                          ("density_factor", 0.1, 10.0), ("modulus_factor", 0.1, 10.0)):
-            if not lo <= values[k] <= hi:
-                raise InputError(f"{source}: parameter {k} = {values[k]:g} is not plausible (expected {lo:g} … {hi:g})")
+        # One test for the usual case (a holder library reads thousands of sets), then the reason.
+        if not all(lo <= values[k] <= hi for k, lo, hi in _PLAUSIBLE) or abs(values["alpha"]) >= 100:
+            for k in ("k_tt", "k_rr", "density_factor", "modulus_factor"):
+                if values[k] <= 0:
+                    raise InputError(f"{source}: parameter {k} must be > 0, got {values[k]:g}")
+            for k in ("eta_tt", "eta_rr"):
+                if values[k] < 0:
+                    raise InputError(f"{source}: parameter {k} must be >= 0, got {values[k]:g}")
+            if abs(values["alpha"]) >= 100:
+                raise InputError(f"{source}: parameter alpha must lie in (-100, 100) %, got {values['alpha']:g}")
+            for k, lo, hi in _PLAUSIBLE:
+                if not lo <= values[k] <= hi:
+                    raise InputError(f"{source}: parameter {k} = {values[k]:g} is not plausible "
+                                     f"(expected {lo:g} … {hi:g})")
         return cls(**values)
+
+
+# Two decades beyond the search space (docs/physics.md §2) is still a holder; far beyond it the
+# matrices overflow or lose all precision.
+_PLAUSIBLE = (("k_tt", 1e2, 1e12), ("k_rr", 1.0, 1e7), ("eta_tt", 0.0, 1.0), ("eta_rr", 0.0, 1.0),
+              ("density_factor", 0.1, 10.0), ("modulus_factor", 0.1, 10.0))
+
+
+def _finite(v) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer beyond any float
+        return False
 
 
 # Medians of five published holders (docs/physics.md §2), used when nothing else is known.

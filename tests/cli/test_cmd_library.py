@@ -16,6 +16,7 @@ from taptune.cli import main
 from taptune.library import HolderLibrary, store
 from taptune.library.exchange import frequency_grid, holder_receptance
 from tests.library.entries import REFERENCE, make_entry
+from tests.library.pg import pg_url, postgres_server  # noqa: F401  (fixtures)
 from tests.library.test_schema import Exploit
 
 REPO = Path(__file__).resolve().parents[2]
@@ -66,6 +67,58 @@ def test_library_option_works_before_the_action_and_env_is_the_fallback(capsys, 
     monkeypatch.setenv("TAPTUNE_LIBRARY", str(lib.path))
     code, out, _ = taptune(capsys, "library", "list", "--json", "-")
     assert json.loads(out)["library"] == str(lib.path)
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def db(request, tmp_path):
+    """A database library (SQLite or the test PostgreSQL server) with 30 holders, some with checks."""
+    from dataclasses import replace
+
+    from tests.library.test_database import a_check
+
+    location = str(tmp_path / "holders.db") if request.param == "sqlite" else request.getfixturevalue("pg_url")
+    lib = HolderLibrary(location)
+    for i in range(30):
+        entry = make_entry(f"{'ER32' if i % 3 == 0 else 'Shrink fit'} pocket {i:02d}", records=1, first=i)
+        lib.put(replace(entry, checks=(a_check(i, "differs"),)) if i == 3 else entry)
+    yield lib
+    lib.close()
+
+
+def test_list_match_and_limit_on_a_database(capsys, db):
+    code, out, err = taptune(capsys, "library", "list", "--match", "er32", "--library", db.url if db.kind ==
+                             "postgresql" else db.path)
+    assert code == 0 and err == ""
+    lines = out.splitlines()
+    assert "last check (UTC)" in lines[0]
+    assert [line.split()[0] for line in lines[2:-1]] == ["ER32"] * 10
+    assert "differs 2026-11-23 08:03" in lines[3]
+    assert lines[-1] == f"10 holders whose name contains 'er32' in {db.location}"
+    code, out, _ = taptune(capsys, "library", "list", "--limit", "4", "--library",
+                           db.url if db.kind == "postgresql" else db.path)
+    assert len(out.splitlines()) == 2 + 4 + 1
+    assert out.splitlines()[-1].startswith(f"4 of 30 holders in {db.location} (--limit N shows more")
+    code, out, _ = taptune(capsys, "library", "list", "--match", "pocket 1", "--json", "-", "--library",
+                           db.url if db.kind == "postgresql" else db.path)
+    data = json.loads(out)
+    assert data["total"] == 10 and sorted(h["name"][-2:] for h in data["holders"]) == [f"{i}" for i in range(10, 20)]
+    assert [h["name"] for h in data["holders"]] == sorted(h["name"] for h in data["holders"])
+    code, out, _ = taptune(capsys, "library", "list", "--match", "nothing", "--library",
+                           db.url if db.kind == "postgresql" else db.path)
+    assert code == 0 and "no holder name contains 'nothing'" in out
+
+
+def test_unknown_holder_in_a_database_suggests_close_names(capsys, db):
+    where = db.url if db.kind == "postgresql" else db.path
+    code, out, err = taptune(capsys, "library", "show", "ER32 pocket 4", "--library", where)
+    assert code == 2 and out == ""
+    msg = one_line(err)
+    assert msg.startswith(f"taptune library: {db.location}: no holder 'ER32 pocket 4'") and "did you mean" in msg
+
+
+def test_list_negative_limit_exits_2(capsys, tmp_path):
+    code, _, err = taptune(capsys, "library", "list", "--limit", "-1", "--library", tmp_path / "h.db")
+    assert code == 2 and "--limit" in one_line(err)
 
 
 def test_list_of_a_missing_library_says_it_is_empty(capsys, tmp_path):

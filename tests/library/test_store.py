@@ -13,7 +13,7 @@ import pytest
 
 from taptune.errors import InputError, LibraryError
 from taptune.library import HolderLibrary, LibraryFormatError, UnknownHolderError, default_library_path
-from taptune.library import store
+from taptune.library import base, json_store
 from tests.library.entries import make_entry, make_record
 
 REPO = Path(__file__).resolve().parents[2]
@@ -139,16 +139,16 @@ def test_default_path_prefers_argument_then_environment(monkeypatch, tmp_path):
 
 def test_default_path_is_the_user_data_folder(monkeypatch, tmp_path):
     monkeypatch.delenv("TAPTUNE_LIBRARY", raising=False)
-    monkeypatch.setattr(store.sys, "platform", "linux")
+    monkeypatch.setattr(base.sys, "platform", "linux")
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
-    assert default_library_path() == tmp_path / "xdg" / "taptune" / "holders.json"
+    assert default_library_path() == tmp_path / "xdg" / "taptune" / "holders.db"
     monkeypatch.setenv("XDG_DATA_HOME", "relative/ignored")
-    assert default_library_path() == Path.home() / ".local" / "share" / "taptune" / "holders.json"
-    monkeypatch.setattr(store.sys, "platform", "darwin")
-    assert default_library_path() == Path.home() / "Library" / "Application Support" / "taptune" / "holders.json"
-    monkeypatch.setattr(store.sys, "platform", "win32")
+    assert default_library_path() == Path.home() / ".local" / "share" / "taptune" / "holders.db"
+    monkeypatch.setattr(base.sys, "platform", "darwin")
+    assert default_library_path() == Path.home() / "Library" / "Application Support" / "taptune" / "holders.db"
+    monkeypatch.setattr(base.sys, "platform", "win32")
     monkeypatch.setenv("APPDATA", str(tmp_path / "Roaming"))
-    assert default_library_path() == tmp_path / "Roaming" / "taptune" / "holders.json"
+    assert default_library_path() == tmp_path / "Roaming" / "taptune" / "holders.db"
 
 
 # --------------------------------------------------------------------------- atomicity
@@ -167,8 +167,8 @@ def test_write_protocol_is_fsync_file_then_replace_then_fsync_folder(lib, monkey
         calls.append(("replace", Path(src).parent == Path(dst).parent))
         real_replace(src, dst)
 
-    monkeypatch.setattr(store.os, "fsync", fsync)
-    monkeypatch.setattr(store.os, "replace", replace)
+    monkeypatch.setattr(json_store.os, "fsync", fsync)
+    monkeypatch.setattr(json_store.os, "replace", replace)
     lib.put(make_entry("B"))
     # The temporary file lives in the library's own folder, so the rename is atomic.
     assert calls == [("fsync", "file"), ("replace", True), ("fsync", "folder")]
@@ -181,7 +181,7 @@ def test_crash_at_replace_leaves_the_old_file_intact(lib, monkeypatch):
     def crash(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(store.os, "replace", crash)
+    monkeypatch.setattr(json_store.os, "replace", crash)
     with pytest.raises(LibraryError, match="No space left on device.*not changed"):
         lib.put(make_entry("B"))
     assert lib.path.read_bytes() == before
@@ -195,7 +195,7 @@ def test_interrupt_while_syncing_leaves_the_old_file_intact(lib, monkeypatch):
     def interrupted(fd):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(store.os, "fsync", interrupted)
+    monkeypatch.setattr(json_store.os, "fsync", interrupted)
     with pytest.raises(KeyboardInterrupt):
         lib.remove("A")
     assert lib.path.read_bytes() == before
@@ -209,7 +209,7 @@ def test_failure_while_encoding_leaves_the_old_file_intact(lib, monkeypatch):
     def broken_encoder(entries, source):
         raise RuntimeError("simulated failure in json.dumps")
 
-    monkeypatch.setattr(store, "encode", broken_encoder)
+    monkeypatch.setattr(json_store, "encode", broken_encoder)
     with pytest.raises(RuntimeError):
         lib.put(make_entry("B"))
     assert lib.path.read_bytes() == before
@@ -217,7 +217,7 @@ def test_failure_while_encoding_leaves_the_old_file_intact(lib, monkeypatch):
 
 CRASH_SCRIPT = """
 import os, signal, sys
-from taptune.library import HolderLibrary, store
+from taptune.library import HolderLibrary, json_store
 from tests.library.entries import make_entry
 lib = HolderLibrary(sys.argv[1])
 real_replace = os.replace
@@ -225,7 +225,7 @@ def die(src, dst):
     # The new library is complete and fsynced in the temporary file; the process is
     # killed before it can take the old file's place.
     os.kill(os.getpid(), signal.SIGKILL)
-store.os.replace = die
+json_store.os.replace = die
 lib.put(make_entry("B"))
 """
 
