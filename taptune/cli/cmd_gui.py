@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from taptune.io.assembly import ASSEMBLY_BESIDE_RULE
+
 VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library", "check")
 
 
@@ -20,7 +22,7 @@ def _size(text: str) -> tuple[int, int]:
 def add_parser(sub, name: str, help_text: str) -> None:
     p = sub.add_parser(name, help=help_text, description=help_text + ".")
     p.add_argument("wav", nargs="?", metavar="WAV", help="recording to open and analyse")
-    p.add_argument("--assembly", metavar="FILE", help="assembly file (default: the .toml beside the WAV)")
+    p.add_argument("--assembly", metavar="FILE", help=f"assembly file (default: the one beside the WAV: {ASSEMBLY_BESIDE_RULE})")
     p.add_argument("--second", metavar="WAV",
                    help="a recording of the same holder and tool at another stick-out (its .toml beside it "
                         "gives the stick-out); both are identified together")

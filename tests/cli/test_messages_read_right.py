@@ -53,4 +53,5 @@ def test_identify_without_assembly_and_none_beside_is_one_line(tmp_path, capsys)
     code = main(["identify", str(wav), "--no-save"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1
-    assert "lonely.wav: no assembly file beside it (lonely.toml, assembly.toml); give one with --assembly FILE" in err
+    assert ("lonely.wav: no assembly file beside it (lonely.toml, else the .toml named like the start of lonely "
+            "(er32_d16_tap.wav -> er32_d16.toml), else assembly.toml); give one with --assembly FILE") in err
