@@ -95,8 +95,10 @@ def print_summary(out: dict, result, stream=None) -> None:
     outlook = out.get("transfer_outlook")
     if outlook:
         rel = [s / f for s, f in zip(outlook["bending_hz_spread"], outlook["bending_hz"])]
-        print(f"transfer: at {outlook['stickout']:g} mm the predicted f1–f3 are good to "
-              f"±{100 * min(rel):.1f}–{100 * max(rel):.1f} % (band: {outlook['band']['method']})", file=stream)
+        # In words: how the band adds up is in --json (transfer_outlook.band).
+        print(f"other stick-outs: at {outlook['stickout']:g} mm the predicted f1–f3 are good to "
+              f"±{100 * min(rel):.1f}–{100 * max(rel):.1f} % (each ± holds the true frequency about 9 times in 10)",
+              file=stream)
     for w in out["warnings"]:
         print(f"warning: {w}", file=stream)
 
