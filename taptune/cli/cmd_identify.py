@@ -37,6 +37,8 @@ def assemblies_beside(wavs) -> list[str]:
 
     found = []
     for wav in wavs:
+        if not Path(wav).is_file():  # a misspelt recording is that, not a missing assembly file
+            raise InputError(f"{wav}: no such file")
         path = assembly_beside(wav)
         if path is None:
             tried = ASSEMBLY_BESIDE_RULE.replace("<name>", Path(wav).stem)

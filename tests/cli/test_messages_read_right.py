@@ -47,6 +47,11 @@ def test_identify_without_assembly_takes_the_one_beside_the_wav(tmp_path, capsys
     assert assemblies_beside([str(wav)]) == [str(tmp_path / "er32_d16_tap.toml")]
 
 
+def test_identify_of_a_recording_that_is_not_there_says_so_not_that_its_assembly_is_missing(tmp_path, capsys):
+    assert main(["identify", str(tmp_path / "tap.wav"), "--no-save"]) == 2
+    assert capsys.readouterr().err == f"taptune identify: {tmp_path / 'tap.wav'}: no such file\n"
+
+
 def test_identify_without_assembly_and_none_beside_is_one_line(tmp_path, capsys):
     wav = tmp_path / "lonely.wav"
     shutil.copyfile(REPO / "recordings" / "er32_d16_tap.wav", wav)

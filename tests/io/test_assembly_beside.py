@@ -42,7 +42,7 @@ def test_the_candidates_are_in_order_and_a_missing_folder_is_no_error(tmp_path):
 def test_every_front_end_uses_the_one_rule(tmp_path, front_end, monkeypatch):
     from taptune.io import assembly
 
-    _touch(tmp_path, "er32_d16.toml")
+    _touch(tmp_path, "er32_d16.toml", "er32_d16_tap2.wav")
     wav = tmp_path / "er32_d16_tap2.wav"
     if front_end == "identify":
         from taptune.cli.cmd_identify import assemblies_beside
