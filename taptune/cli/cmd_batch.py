@@ -7,13 +7,14 @@ import sys
 
 from taptune.cli.cmd_toolpoint import add_model_args
 from taptune.cli.cut import add_cut_args
+from taptune.io.assembly import ASSEMBLY_BESIDE_RULE
 
 
 def add_parser(sub, name, help_text):
     p = sub.add_parser(name, help=help_text, description=(
         "Identify every recording (WAV, FLAC, MP3, Ogg, M4A …) under the given files and folders (recursively), in "
-        "parallel worker processes. Each recording uses --assembly, else the .toml with the same "
-        "stem beside it (name_tap.wav may use name.toml), else an assembly.toml in its folder. Writes one result JSON per recording "
+        "parallel worker processes. Each recording uses --assembly, else the assembly file beside it: "
+        f"{ASSEMBLY_BESIDE_RULE}. Writes one result JSON per recording "
         "(as 'taptune identify --json') and summary.csv into --out, and stores the holders in the "
         "library. One bad file never stops the batch; the exit status is 1 if any file failed. "
         "Recordings identified before with the same content (sha256) are skipped unless --force. "

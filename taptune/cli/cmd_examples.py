@@ -7,6 +7,14 @@ commands of the documentation run as written from inside ``DIR``.
 
 from __future__ import annotations
 
+# What to run first in the copied folder, in this order: identify the tapped holder (it goes
+# into the library), then predict it with the same tool at two other stick-outs (an assembly
+# of another holder would only borrow this holder's contact, with a warning).
+TRY = (
+    "taptune identify recordings/er32_d16_tap.wav --assembly recordings/er32_d16.toml",
+    'taptune predict assets/er32_hsk63_d16.toml --holder "ER32 collet chuck HSK-A63 x 100" --stickout 60 70',
+)
+
 
 def add_parser(sub, name: str, help_text: str) -> None:
     p = sub.add_parser(name, help=help_text, description=(
@@ -30,7 +38,7 @@ def run(args) -> int:
         groups.setdefault(path.relative_to(dest).parent, []).append(path.name)
     for folder, names in groups.items():
         print(f"{dest / folder}/: {', '.join(names)}")
-    print(f"\n{len(written)} files copied. Try, from {dest}:\n"
-          "  taptune identify recordings/er32_d16_tap.wav --assembly recordings/er32_d16.toml\n"
-          "  taptune predict assets/er32_hsk63_d6.toml --holder \"ER32 collet chuck HSK-A63 x 100\" --stickout 30 40")
+    print(f"\n{len(written)} files copied. Try, from {dest}:")
+    for command in TRY:
+        print("  " + command)
     return 0

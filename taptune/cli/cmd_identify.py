@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
+
+from taptune.io.assembly import ASSEMBLY_BESIDE_RULE
 
 
 def add_parser(sub, name, help_text):
@@ -13,7 +16,7 @@ def add_parser(sub, name, help_text):
     p.add_argument("wav", nargs="+", help="tap recording(s): WAV, FLAC, MP3, Ogg/Opus, M4A/AAC or a phone video")
     p.add_argument("--assembly", action="append", metavar="FILE",
                    help="assembly TOML (once for all recordings, or once per recording; default: the one "
-                        "beside each recording: <name>.toml, <name without _tap>.toml or assembly.toml)")
+                        f"beside each recording: {ASSEMBLY_BESIDE_RULE})")
     p.add_argument("--library", metavar="PATH", help="holder library file (default: $TAPTUNE_LIBRARY or the user data folder)")
     p.add_argument("--seed", type=int, default=0, help="random seed: the same seed gives the same result (default 0)")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
@@ -30,13 +33,15 @@ def add_parser(sub, name, help_text):
 def assemblies_beside(wavs) -> list[str]:
     """The assembly file beside each recording, named on stderr; an InputError if one has none."""
     from taptune.errors import InputError
-    from taptune.io.assembly import assembly_beside, assembly_candidates
+    from taptune.io.assembly import assembly_beside
 
     found = []
     for wav in wavs:
+        if not Path(wav).is_file():  # a misspelt recording is that, not a missing assembly file
+            raise InputError(f"{wav}: no such file")
         path = assembly_beside(wav)
         if path is None:
-            tried = ", ".join(c.name for c in assembly_candidates(wav))
+            tried = ASSEMBLY_BESIDE_RULE.replace("<name>", Path(wav).stem)
             raise InputError(f"{wav}: no assembly file beside it ({tried}); give one with --assembly FILE")
         print(f"assembly of {wav}: {path} (beside it)", file=sys.stderr)
         found.append(str(path))
@@ -92,8 +97,10 @@ def print_summary(out: dict, result, stream=None) -> None:
     outlook = out.get("transfer_outlook")
     if outlook:
         rel = [s / f for s, f in zip(outlook["bending_hz_spread"], outlook["bending_hz"])]
-        print(f"transfer: at {outlook['stickout']:g} mm the predicted f1–f3 are good to "
-              f"±{100 * min(rel):.1f}–{100 * max(rel):.1f} % (band: {outlook['band']['method']})", file=stream)
+        # In words: how the band adds up is in --json (transfer_outlook.band).
+        print(f"other stick-outs: at {outlook['stickout']:g} mm the predicted f1–f3 are good to "
+              f"±{100 * min(rel):.1f}–{100 * max(rel):.1f} % (each ± holds the true frequency about 9 times in 10)",
+              file=stream)
     for w in out["warnings"]:
         print(f"warning: {w}", file=stream)
 

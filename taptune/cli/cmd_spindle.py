@@ -1,6 +1,6 @@
 """``taptune spindle --dummy FILE --aa CSV --ab CSV --bb CSV --points A_MM B_MM --out SPINDLE_CSV [--plot PNG]``.
 
-Inverse receptance coupling (MODEL.md §10.3, MACHINE.md): the spindle's 2×2 receptance
+Inverse receptance coupling (docs/machine.md, "Measuring the spindle"): the spindle's 2×2 receptance
 at the coupling plane in one bending direction, from three hammer-test FRFs on a simple
 dummy holder in the spindle. Ill-conditioned by nature: noisy FRFs are replaced by a
 rational fit first, and the bands where the result cannot be trusted are reported and shaded.

@@ -1,8 +1,8 @@
 """Advice after an identification: when one recording leaves the predicted bands wide, ask for a second tap.
 
 One tap at one stick-out pins down the holder only as far as that stick-out needs: other
-near-optimal parameter sets fit it as well and part ways at other stick-outs (MODEL.md
-§8.6). A second recording of the same holder and tool at another stick-out, identified
+near-optimal parameter sets fit it as well and part ways at other stick-outs (docs/physics.md,
+§5). A second recording of the same holder and tool at another stick-out, identified
 jointly, separates them. The rule and the prediction are ``taptune identify``'s.
 """
 

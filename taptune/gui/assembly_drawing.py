@@ -19,7 +19,7 @@ class AssemblyDrawing(QWidget):
     """Section of holder and tool drawn with one scale for both axes.
 
     The holder is shown in section (outer contour filled, bore lighter), the tool on
-    top of it, the contact zone (MODEL.md §1.3) as an orange band, and the stick-out and
+    top of it, the contact zone (docs/physics.md, §1) as an orange band, and the stick-out and
     contact lengths as dimension lines, so a wrong number in the form is seen at once.
     """
 

@@ -43,28 +43,13 @@ from taptune.gui.signals import emit
 from taptune.gui.spectrum_view import SpectrumView, relabel
 from taptune.gui.workers import TaskRunner
 from taptune.identify.bands import measured_modes
+from taptune.io.assembly import assembly_beside
 from taptune.io.audio import AUDIO_SUFFIXES
 
 # The open dialogs' filter: every format read_audio reads, in both cases.
 AUDIO_FILTER = "Recordings (" + " ".join(f"*{s} *{s.upper()}" for s in AUDIO_SUFFIXES) + ")"
 
 VIEWS = ("record", "spectrum", "fit", "predict", "machine", "library", "check")
-
-
-def sidecar_assembly(path) -> str | None:
-    """The assembly file of a recording: same name with ``.toml``, else the file whose name starts it.
-
-    ``er32_d16_tap.wav`` finds ``er32_d16_tap.toml`` or else ``er32_d16.toml`` (the longest
-    such name wins), so several takes of one assembly can share one assembly file.
-    """
-    path = Path(path)
-    same = path.with_suffix(".toml")
-    if same.is_file():
-        return str(same)
-    stem = path.stem
-    candidates = [p for p in path.parent.glob("*.toml")
-                  if stem.startswith(p.stem) and stem[len(p.stem):len(p.stem) + 1] in ("_", "-", " ", ".")]
-    return str(max(candidates, key=lambda p: len(p.stem))) if candidates else None
 
 
 def analyse_file(path: str, assembly, recording=None):
@@ -177,7 +162,7 @@ class MainWindow(QMainWindow):
         rl.addWidget(self.recorder)
         open_box = QLabel("…or open a recording made earlier: <b>Open recording…</b> above, or drop an audio "
                           "file (WAV, FLAC, MP3, a phone's M4A or video…) onto the window. An assembly file with "
-                          "the same name beside it is loaded too.")
+                          "the same name (or named like the start of its name, or assembly.toml) beside it is loaded too.")
         open_box.setWordWrap(True)
         open_box.setMaximumWidth(760)
         rl.addWidget(open_box)
@@ -387,7 +372,7 @@ class MainWindow(QMainWindow):
                        "The 2nd recording is the same holder and tool at another stick-out: open or record "
                        "the first one and describe its assembly on the left.")
             return
-        toml_path = sidecar_assembly(path)
+        toml_path = assembly_beside(path)
         if toml_path:
             try:
                 beside = load_assembly(toml_path)
@@ -473,14 +458,14 @@ class MainWindow(QMainWindow):
         """Read and analyse a recording in the background.
 
         The assembly comes from ``assembly_path``, else from the assembly file beside the
-        recording (:func:`sidecar_assembly`), else from the panel as it is.
+        recording (:func:`taptune.io.assembly.assembly_beside`), else from the panel as it is.
         """
         from taptune.errors import InputError
 
         if self._identify_task is not None:
             show_error(self, "Busy", "Wait for the identification to end (or cancel it) before opening a recording.")
             return
-        toml_path = assembly_path or sidecar_assembly(path)
+        toml_path = assembly_path or assembly_beside(path)
         if toml_path:
             try:
                 self.assembly_panel.load_file(toml_path)

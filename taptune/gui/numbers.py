@@ -10,24 +10,11 @@ from __future__ import annotations
 
 import math
 
+from taptune.report.text import number  # noqa: F401  (the views' one formatter, shared with the CLI and the PDF)
+
 #: Shown instead of "value ± spread" when the spread exceeds the value (a table cell;
 #: the surrounding text says "by this tap").
 NOT_DETERMINED = "not determined"
-
-
-def number(value: float, spec: str) -> str:
-    """``format(value, spec)`` with the sign dropped where the printed number is zero.
-
-    ``spec`` is a format spec (``"+.2f"``) or a template with one field (``"{:.3g}"``).
-
-    >>> number(-0.0004, "+.2f"), number(0.0, "+.2f"), number(-0.013, "+.2f")
-    ('0.00', '0.00', '-0.01')
-    """
-    text = spec.format(value) if spec.startswith("{") else format(value, spec)
-    mantissa = text.lstrip("+-").split("e")[0].split("E")[0]
-    if text[:1] in "+-" and not any(c in "123456789" for c in mantissa):
-        return text[1:]
-    return text
 
 
 def determined(value: float, spread: float) -> bool:

@@ -556,22 +556,36 @@ def assembly_from_toml(text: str, source: str = "<assembly>") -> Assembly:
     return parse_assembly(_loads(text, source), source)
 
 
-def assembly_candidates(recording: str | Path) -> list[Path]:
-    """Where the assembly file of a recording may be, in the order they are tried.
+# How a recording finds its assembly file, in words for help texts and error messages.
+ASSEMBLY_BESIDE_RULE = ("<name>.toml, else the .toml named like the start of <name> "
+                        "(er32_d16_tap.wav -> er32_d16.toml), else assembly.toml")
 
-    Beside the recording: ``<stem>.toml``, then the stem without a ``_tap``/``-tap``
-    ending (``er32_d16_tap.wav`` → ``er32_d16.toml``, as in ``recordings/``), then
-    ``assembly.toml``.
+
+def assembly_candidates(recording: str | Path) -> list[Path]:
+    """The assembly files beside a recording that may describe it, best first.
+
+    One rule for every front end (identify, batch, the desktop app): ``<stem>.toml``;
+    then the ``.toml`` files whose name starts the recording's name and is followed
+    there by ``_``, ``-``, a space or ``.``, the longest first (``er32_d16_tap.wav`` and
+    ``er32_d16_tap2.wav`` → ``er32_d16.toml``, as in ``recordings/``: several takes of one
+    assembly share one file); then ``assembly.toml`` (``tap.wav`` → ``assembly.toml``).
+    Only files that exist are listed, except the first and last names, which are always
+    there for an error message to name.
     """
     recording = Path(recording)
-    stem = recording.stem
-    bare = stem[:-4] if stem.lower().endswith(("_tap", "-tap")) and len(stem) > 4 else stem
-    return list(dict.fromkeys([recording.with_suffix(".toml"), recording.with_name(bare + ".toml"),
-                               recording.parent / "assembly.toml"]))
+    stem, folder = recording.stem, recording.parent
+    try:
+        tomls = [p for p in folder.iterdir() if p.suffix.lower() == ".toml" and p.is_file()]
+    except OSError:  # no such folder (yet): only the fixed names
+        tomls = []
+    prefixes = sorted((p for p in tomls if len(p.stem) < len(stem) and stem.startswith(p.stem)
+                       and stem[len(p.stem)] in "_- ."), key=lambda p: -len(p.stem))
+    return list(dict.fromkeys([recording.with_suffix(".toml"), *prefixes, folder / "assembly.toml"]))
 
 
 def assembly_beside(recording: str | Path) -> Path | None:
-    """The assembly file beside a recording (:func:`assembly_candidates`); None if there is none."""
+    """The assembly file of a recording (:func:`assembly_candidates`, the first that is
+    a file); None if there is none."""
     return next((c for c in assembly_candidates(recording) if c.is_file()), None)
 
 

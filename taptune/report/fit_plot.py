@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from taptune.report.text import signed
+
 
 KIND_COLOURS = {"bending": "#c0392b", "local": "#7f8c8d", "other": "#2980b9"}
 
@@ -81,7 +83,7 @@ def draw_identification(fig, result, analyses, title: str = "") -> None:
     fig.suptitle(
         (title + "\n" if title else "")
         + f"k_tt {p.k_tt:.3g} N/m/mm · k_rr {p.k_rr:.3g} N·m/rad/mm · eta_tt {p.eta_tt:.2g} · eta_rr {p.eta_rr:.2g} 1/mm · "
-        f"alpha {p.alpha:+.1f} % · ρ×{p.density_factor:.3f} · E×{p.modulus_factor:.3f}",
+        f"alpha {signed(p.alpha, 1)} % · ρ×{p.density_factor:.3f} · E×{p.modulus_factor:.3f}",
         fontsize=9,
     )
 

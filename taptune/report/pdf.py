@@ -22,6 +22,7 @@ from typing import Sequence
 from taptune.errors import InputError
 from taptune.identify.bands import WIDE_BAND
 from taptune.io.atomic import atomic_write
+from taptune.report.text import number
 
 PAGE_SIZE_IN = (11.69, 8.27)  # A4 landscape
 STICKOUT_OFFSETS_MM = (-20.0, -10.0, 0.0, 10.0, 20.0)
@@ -198,7 +199,7 @@ def parameter_cells(result) -> list[list[str]]:
 
     spread = result.param_spread
     return [
-        [_SYMBOLS.get(name, name), _FORMATS.get(name, "{:.4g}").format(getattr(result.params, name)),
+        [_SYMBOLS.get(name, name), number(getattr(result.params, name), _FORMATS.get(name, "{:.4g}")),
          "± " + _SPREAD_FORMAT.format(spread[name]), PARAM_UNITS[name]]
         for name in NAMES
     ]

@@ -61,3 +61,42 @@ def test_gui_without_pyside6_names_the_extra_in_one_line(monkeypatch, capsys):
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1
     assert "pip install 'taptune[gui]'" in err
+
+
+def _suggested(out: str) -> list[list[str]]:
+    """The commands 'taptune examples' suggests, as argument lists, in its order."""
+    import shlex
+
+    tail = out.split("Try, from", 1)[1].splitlines()[1:]
+    return [shlex.split(line)[1:] for line in tail if line.strip().startswith("taptune ")]
+
+
+def test_the_suggested_commands_name_one_holder_and_files_that_are_copied(tmp_path, capsys):
+    # Cheap: what each suggested command reads is in the folder, and predict asks for the
+    # holder identify stores, with an assembly of that same holder (no borrowed contact).
+    from taptune.cli import _build_parser
+    from taptune.io.assembly import load_assembly
+
+    assert main(["examples", str(tmp_path)]) == 0
+    commands = _suggested(capsys.readouterr().out)
+    assert [c[0] for c in commands] == ["identify", "predict"]
+    identify, predict = (_build_parser(c[0]).parse_args(c) for c in commands)
+    tapped = load_assembly(tmp_path / identify.assembly[0])
+    assert (tmp_path / identify.wav[0]).is_file()
+    assert load_assembly(tmp_path / predict.assembly).holder == tapped.holder
+    assert predict.holder == tapped.holder.name
+
+
+@pytest.mark.slow
+def test_the_suggested_commands_run_in_order_in_the_copied_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("TAPTUNE_LIBRARY", str(tmp_path / "holders.json"))
+    monkeypatch.setenv("TAPTUNE_CACHE_DIR", "off")
+    assert main(["examples", "ex"]) == 0
+    commands = _suggested(capsys.readouterr().out)
+    monkeypatch.chdir(tmp_path / "ex")
+    for argv in commands:
+        code = main(argv)
+        err = capsys.readouterr().err
+        assert code == 0, f"taptune {' '.join(argv)}: {err}"
+        assert "its holder is" not in err, err  # no holder borrowed from another assembly

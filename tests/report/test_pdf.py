@@ -134,3 +134,14 @@ def test_an_unwritable_report_is_bad_input(joint_case, tmp_path):
     blocker.write_text("")
     with pytest.raises(InputError, match="cannot write the report"):
         write_identification_report(blocker / "r.pdf", *joint_case)
+
+
+def test_an_alpha_that_rounds_to_zero_prints_without_a_sign():
+    # A slope of -0.001 % is no slope: the page prints "0.00", never "-0.00".
+    from dataclasses import replace
+
+    view = hand_made_identification([_asm()])
+    for alpha, shown in ((-0.001, "0.00"), (0.0, "0.00"), (-0.006, "-0.01"), (2.5, "+2.50")):
+        cells = {row[0]: row for row in parameter_cells(replace(view, params=replace(NOMINAL, alpha=alpha)))}
+        assert cells["α"][1] == shown
+
