@@ -121,7 +121,7 @@ WRITES = {"out", "json", "plot", "csv", "uff", "report", "screenshot", "dir", "l
 # (name each one outside its code blocks).
 USER_FILES = {
     "tap-test.md": {"tap.wav", "my.toml", "other-tool.toml"},
-    "library.md": {"colleague.json"},
+    "library.md": {"colleague.json", "team.json"},
     "machine.md": {"dummy.toml", "G_aa.csv", "G_ab.csv", "G_bb.csv", "tool_tip.csv"},
 }
 # Cheap enough to run for real (a second or less each, no library holder needed).
