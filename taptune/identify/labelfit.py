@@ -59,12 +59,14 @@ class LabelFitOptions:
         Labelings costing this much more than the best under the guidance are not fitted.
     close : float
         Fit-score difference below which the choice is reported as a close call.
-    explained_misfit, missed_misfit : float
+    explained_misfit, missed_misfit, dropped_misfit : float
         A labeling whose quick fit meets every peak within ``explained_misfit``
         (relative: the peaks' precision, plus the pull of the fit's prior) beats one that
         explains every loud peak but misses a peak by ``missed_misfit`` or more, when the
-        fit prefers it and it assigns as many modes: the loud peak it leaves out is then
-        not a bending mode of this holder (an axial, table or fixture resonance).
+        fit prefers it: the loud peak it leaves out is then not a bending mode of this
+        holder (an axial, table or fixture resonance). When it assigns fewer modes the
+        miss must reach ``dropped_misfit``: holders outside the model family are fitted
+        about 1 % off, and their loud true mode must not be dropped for that.
     """
 
     sigma_model: float = 0.01
@@ -76,6 +78,7 @@ class LabelFitOptions:
     close: float = 1.0
     explained_misfit: float = 0.003
     missed_misfit: float = 0.01
+    dropped_misfit: float = 0.03
 
 
 @dataclass(frozen=True)
@@ -327,19 +330,22 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
     best = allowed[0]
     warnings = []
     name = analysis.file or "recording"
-    # ... unless taking it leaves the fitted model percent off while a labeling of as many
-    # modes, which the fit prefers, is explained within the peaks' precision: then the
-    # loud peak is not a bending mode of this holder (a holder the model describes
-    # exactly, its mode 3 beside a louder axial mode, was fitted 2-3 % off).
-    explained = [c for c in choices if c.misfit <= options.explained_misfit and c.assigned >= best.assigned
-                 and c.score < best.score]
-    if best.misfit >= options.missed_misfit and explained:
-        loud = [peaks[i] for i in best.labeling.modes if i is not None and i not in explained[0].labeling.modes]
+    # ... unless taking it leaves the fitted model percent off while a labeling the fit
+    # prefers is explained within the peaks' precision: then the loud peak is not a
+    # bending mode of this holder (a holder the model describes exactly, its mode 3 beside
+    # a louder axial mode, was fitted 2-3 % off; another, tapped again 10 mm out, took a
+    # table resonance and an interface mode for modes 2 and 3, 22 % off).
+    explained = [c for c in choices if c.misfit <= options.explained_misfit and c.score < best.score and c.assigned
+                 and best.misfit >= (options.missed_misfit if c.assigned >= best.assigned else options.dropped_misfit)]
+    if explained:
+        loud = [f"{peaks[i].hz:.0f} Hz" for i in best.labeling.modes
+                if i is not None and i not in explained[0].labeling.modes]
+        what, it = ("peak at", "it") if len(loud) == 1 else ("peaks at", "them")
         warnings.append(
-            f"{name}: the prominent peak at {', '.join(f'{q.hz:.0f} Hz' for q in loud)} is left as other, not "
-            f"taken as a bending mode: the fitted model explains {_describe(explained[0].labeling, peaks)} within "
-            f"{100 * explained[0].misfit:.2f} % and would miss by {100 * best.misfit:.1f} % with it (an axial, "
-            f"table or fixture resonance? if it is a bending mode, check the assembly dimensions)")
+            f"{name}: the prominent {what} {', '.join(loud)} left as other, not bending: the fitted "
+            f"model explains {_describe(explained[0].labeling, peaks)} within {100 * explained[0].misfit:.2f} % and "
+            f"would miss by {100 * best.misfit:.1f} % with {it} (an axial, table or fixture resonance? if a bending "
+            f"mode, check the assembly dimensions)")
         best = explained[0]
     others = [c for c in choices if c is not best]
     runner = others[0] if others else None

@@ -39,7 +39,7 @@ def test_the_loud_peak_beside_mode_3_is_other_and_named(loud_neighbour):
     loud = min(analysis.peaks, key=lambda p: abs(p.hz - spurious))
     assert abs(loud.hz / spurious - 1) < 1e-3 and loud.kind == "other"
     assert loud.level_db > max(p.level_db for p in analysis.peaks if p.kind == "bending" and p.mode == 3) + 6
-    said = [w for w in analysis.warnings if f"{loud.hz:.0f} Hz is left as other" in w]
+    said = [w for w in analysis.warnings if f"peak at {loud.hz:.0f} Hz left as other" in w]
     assert len(said) == 1 and "would miss by" in said[0]
 
 
