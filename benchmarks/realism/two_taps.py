@@ -22,7 +22,9 @@ stick-outs stated to ±0.05 mm, ``--split infamily --stickout-error 0.05``;
 ``two_taps_{issue,harsh}_validation_12.json``: the first 12 validation holders of each
 tier): with all six frequencies heard, the joint fit met holders the model describes to
 0.008–0.064 % (one at 0.79 %: a mislabelled peak) and predicted 10 mm further within
-0.09 %; holders outside the family to 0.66–3.6 %. One tap cannot show this (its three
+0.09 %; holders outside the family to 0.31–3.6 % (all six heard; 0.13 % and more with
+five, 11 holders of 24), and with two or three frequencies the joint fit meets them either
+way (0.004–3.0 %, errors up to 27 %). One tap cannot show this (its three
 frequencies are met by five parameters whatever the holder: ``calibrate_bands.py
 --evidence``).
 
