@@ -341,10 +341,12 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
         loud = [f"{peaks[i].hz:.0f} Hz" for i in best.labeling.modes
                 if i is not None and i not in explained[0].labeling.modes]
         what, it = ("peak at", "it") if len(loud) == 1 else ("peaks at", "them")
+        said = (f"the prominent {what} {', '.join(loud)} left as other, not bending" if loud
+                else f"labels were ambiguous: chose {_describe(explained[0].labeling, peaks)}")
         warnings.append(
-            f"{name}: the prominent {what} {', '.join(loud)} left as other, not bending: the fitted "
-            f"model explains {_describe(explained[0].labeling, peaks)} within {100 * explained[0].misfit:.2f} % and "
-            f"would miss by {100 * best.misfit:.1f} % with {it} (an axial, table or fixture resonance? if a bending "
+            f"{name}: {said}: the fitted model explains {_describe(explained[0].labeling, peaks)} within "
+            f"{100 * explained[0].misfit:.2f} % and would miss by {100 * best.misfit:.1f} % with "
+            f"{it if loud else _describe(best.labeling, peaks)} (an axial, table or fixture resonance? if a bending "
             f"mode, check the assembly dimensions)")
         best = explained[0]
     others = [c for c in choices if c is not best]
