@@ -95,6 +95,15 @@ model-form term, set + geometry alone are ±0.76 % (median) on the in-family val
 holders (0.52 % with three modes heard), ±1.85 / 2.16 % on the ruler tiers and ±1.23 /
 1.84 % on the gauge ones. bands.py is unchanged.
 
+Two taps (``--joint --evidence`` on the two-tap records that keep the joint fit,
+``two_taps_<tier>_calibration_12.json`` + ``two_taps_infamily_calibration.json``, validated
+on the ``validation`` ones): the taps *agree* when 5+ of their 6 frequencies were heard
+and the joint fit meets all within 0.1 %. None of 48 holders outside the family agreed
+(with 5–6 heard their joint misfit is 0.13–3.6 %), 13 of 24 in the family did, errors
+≤ 0.11 % (median 0.02 %): the evidence a narrower joint band could rest on, but no holder
+outside the family lands in the cell, so its c cannot be calibrated (MODEL_FORM_JOINT
+unchanged).
+
 ``--by-tier`` calibrates each tier alone and keeps the larger c (the shipped choice: each
 tier covered, not only the pool). ``--write`` puts MODEL_FORM, DELTA_REF_MM and CALIBRATION into bands.py; the comment above
 MODEL_FORM and the numbers in docs/physics.md §5 are then updated by hand from the printout
@@ -600,6 +609,50 @@ def write_constants(c: dict, delta_ref: float, note: str) -> None:
     print(f"wrote MODEL_FORM = {{{body}}}, DELTA_REF_MM = {ref} into {path}")
 
 
+#: Two taps agree when the joint fit heard this many of their six frequencies ...
+AGREED_HEARD = 5
+
+
+def agreement_rows(paths) -> list[dict]:
+    """The ``rows`` of two-tap results whose records keep the joint fit (``identification``),
+    each marked ``agreed`` (at least :data:`AGREED_HEARD` frequencies heard over both taps,
+    all met within EXPLAINED × the peaks' precision); in-family rows get their own tier."""
+    out = []
+    for rec in load(paths):
+        ident = rec.get("identification")
+        if "failed" in rec or ident is None:
+            continue
+        heard = sum(f is not None for tap in ident["bending_measured_hz"] for f in tap)
+        agreed = heard >= AGREED_HEARD and ident["relative_floor"] <= EXPLAINED * PRECISION
+        for r in rec["rows"]:
+            out.append({**r, "tier": "infamily" if r["split"] == "infamily" else r["tier"],
+                        "agreed": agreed, "heard": heard})
+    return out
+
+
+def joint_agreement(cal_paths, val_paths) -> None:
+    """Does the two taps' agreement predict the error? Per tier, how many holders agree and
+    their errors; Mondrian cells group × agreement calibrated each tier alone (the largest
+    kept) and measured on the validation rows beside MODEL_FORM_JOINT."""
+    cal, val = agreement_rows(cal_paths), agreement_rows(val_paths)
+    print(f"\ntwo taps' agreement ({AGREED_HEARD}+ of 6 frequencies heard, all met within "
+          f"{100 * EXPLAINED * PRECISION:g} %):")
+    for title, rs in (("calibration", cal), ("validation", val)):
+        for tier in sorted({r["tier"] for r in rs}):
+            sel = [r for r in rs if r["tier"] == tier]
+            ag = [r for r in sel if r["agreed"]]
+            e = [100 * r["err"] / r["f"] for r in ag]
+            print(f"  {title} {tier}: {len(ag) // 3} of {len(sel) // 3} holders agree"
+                  + (f", |err| median {np.median(e):.3f} %, max {np.max(e):.2f} %" if e else ""))
+    cell = lambda r: "agreed" if r["agreed"] else "not"  # noqa: E731
+    c = calibrate(cal, by_tier=True, cell=cell)
+    print("  c per group × agreement: " + ", ".join(f"{k} {100 * v:.3f} %" for k, v in c.items()))
+    for tier in sorted({r["tier"] for r in val}):
+        rs = [r for r in val if r["tier"] == tier]
+        print("  " + line(f"{tier} (validation), joint c", stats(rs, bands.MODEL_FORM_JOINT)))
+        print("  " + line(f"{tier} (validation), agreement cells", stats(rs, c, cell=cell)))
+
+
 def joint(cal_paths, val_paths, write: bool) -> None:
     """Calibrate MODEL_FORM_JOINT on joint (two-tap) identifications: the ``rows`` of
     ``benchmarks/realism/two_taps.py`` results (set and geometry parts of each prediction
@@ -690,6 +743,8 @@ def main(argv=None) -> int:
         ap.error("--records is required (or --rewrite-results)")
     if args.joint:
         joint(args.records, args.validate, args.write)
+        if args.evidence:
+            joint_agreement(args.records, args.validate)
         return 0
     if args.gauge:
         gauge(args.records, args.validate, args.cache)

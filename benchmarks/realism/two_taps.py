@@ -17,10 +17,13 @@ before that constant existed: their ``predictions`` carry the one-tap coefficien
 
 Each record keeps the joint fit's ``identification`` (measured and model frequencies per
 tap, ``relative_floor``): how well one parameter set meets both taps, the evidence a second
-tap adds. Measured 2026-11-27 (``two_taps_infamily.json``: 24 holders the model describes,
-stick-outs stated to ±0.05 mm, ``--split infamily --stickout-error 0.05``;
-``two_taps_{issue,harsh}_validation_12.json``: the first 12 validation holders of each
-tier): with all six frequencies heard, the joint fit met holders the model describes to
+tap adds. Measured 2026-11-27 (``two_taps_infamily_{calibration,validation}.json``: 24
+holders the model describes, stick-outs stated to ±0.05 mm, ``--split infamily
+--stickout-error 0.05``, indices 12–23 / 0–11; ``two_taps_<tier>_<split>_12.json``: the
+first 12 holders of each tier and split; ``calibrate_bands.py --joint --evidence``): none
+of the 48 holders outside the family agreed (5+ of 6 frequencies heard, all met within
+0.1 %), 13 of 24 in the family did (errors ≤ 0.11 %). With all six frequencies heard, the
+joint fit met holders the model describes to
 0.008–0.064 % (one at 0.79 %: a mislabelled peak) and predicted 10 mm further within
 0.09 %; holders outside the family to 0.31–3.6 % (all six heard; 0.13 % and more with
 five, 11 holders of 24), and with two or three frequencies the joint fit meets them either
