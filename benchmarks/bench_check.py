@@ -35,6 +35,20 @@ With the stick-outs read (and stated) to ±0.05 mm, a gauge (``--stickout-error 
     worn 0.3            0/12/0                     0/11/1
     worn 0.5 elsewhere  0/4/8                      0/3/9
 
+Holders the model describes (``--split infamily --stickout-error 0.05``: exact stick-outs
+stated to ±0.05 mm, 8 references, 2026-11-27)::
+
+    re-clamped          8/0/0
+    elsewhere           6/0/2
+    worn 0.5            0/8/0
+    worn 0.3            0/8/0
+    worn 0.5 elsewhere  0/4/4
+
+the inconclusive ones at another stick-out (5–10 mm away) with bands of ±1–2.4 %: a
+worn holder's 1.8–3.8 % drop is then 1.8–2.9 standard deviations, short of the 3 that
+``differs`` needs. Each row keeps the reference identification's ``measured_modes`` and
+``relative_floor``, so :func:`rejudge`-like re-evaluations can recompute bands offline.
+
 No good holder reads ``differs``, no worn one ``consistent`` (with either). Before the interface-band
 rule of :mod:`taptune.identify.check`, che008 re-clamped read ``differs``: its mode 1
 (9.76 kHz) sits between interface modes at 9.49 and 9.96 kHz and the identification took
@@ -110,6 +124,9 @@ def run_reference(index: int, folder: str, split: str = "check", tier: str = "ha
             "modes": check.result.to_dict()["modes"], "reasons": list(check.result.reasons),
             "worn_hz": [round(f, 2) for f in check.worn_hz],
             "band": None if check.prediction.band is None else check.prediction.band.to_dict(),
+            # The reference identification's evidence (what the band may be conditioned on).
+            "measured_modes": [m is not None for m in result.bending_measured_hz[0]],
+            "relative_floor": result.relative_floor,
             "identify_cpu_s": round(identify_cpu, 2), "check_cpu_s": round(time.process_time() - t1, 2),
         })
     return rows

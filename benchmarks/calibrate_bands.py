@@ -62,6 +62,48 @@ unknown 2.965 % (shipped 0.566 / 1.074 / 2.884 %): no narrower bands (validation
 tier ± 2.63 % against 2.25 % with the shipped c, both ≈ 97 % covered), so the shipped c
 serve a gauge too.
 
+What the fit shows (issue 22): ``--evidence`` asks whether the misfit of the fit (against
+the measured modes, relative to the peaks' 0.05 % precision) and the number of measured
+modes predict the transfer error, and calibrates Mondrian cells evidence group × fit class
+(``explained``: all three modes measured and met within 2 × 0.05 %), each tier alone: the
+ruler tiers, the gauge-read holders (``gauge_*_validation.json``, then not validation; the
+``_24`` halves stay held out) as tiers of their own, and in-family holders with the
+stick-out stated to 0.05 mm (``run --split infamily --stickout-error 0.05``: indices 12–29
+calibrate, 0–11 and 30–47 validate)::
+
+    python benchmarks/calibrate_bands.py --by-tier --evidence --cache /tmp/rows.json \
+        --records $R/results_issue_calibration*.json $R/results_harsh_calibration*.json \
+                  $R/results_infamily_gauge_calibration.json \
+                  $R/gauge_issue_validation.json $R/gauge_harsh_validation.json \
+        --validate $R/results_issue_validation*.json $R/results_harsh_validation*.json \
+                   $R/results_infamily_gauge_validation*.json $R/gauge_*_validation_24.json
+
+Measured 2026-11-27 (stored records; 1140 calibration predictions outside the family, 108
+in it): the fit's misfit (unfloored) barely ranks the errors — Spearman with |error| +0.16
+(pinned), +0.03 (free), +0.18 (unknown), with the c each prediction needs −0.01, −0.00,
++0.21; the 90 % c of the pinned predictions by misfit tercile 0.36 / 0.24 / 0.47 %. In-family
+fits of three modes meet them to a median 0.009 %, outside ones to 0.014–0.016 %: one tap's
+three frequencies are met by five parameters whatever the holder. The number of measured
+modes does predict the error (outside: median 0.37 / 1.16 / 2.03 % with 3 / 2 / 1 modes),
+but the set part already follows it (set + geometry median 0.77 / 1.92 / 8.56 %). The cells
+group × fit class need, each tier alone: pinned/explained 0.35 % (harsh), 0.25 (issue),
+0.84 (harsh gauge), 0.06 (issue gauge), 0 (in-family); the largest kept, every validation
+set gets wider bands (issue 96.9 % at ±3.32 %, shipped 94.8 % at ±2.62 %; in-family 100 %
+at ±2.86 %, shipped ±1.91 %). Calibrated on the ruler tiers alone they give pinned/explained
+0.35 % but cover the pinned modes of 24 gauge-read harsh holders only 83 %. Whatever the
+model-form term, set + geometry alone are ±0.76 % (median) on the in-family validation
+holders (0.52 % with three modes heard), ±1.85 / 2.16 % on the ruler tiers and ±1.23 /
+1.84 % on the gauge ones. bands.py is unchanged.
+
+Two taps (``--joint --evidence`` on the two-tap records that keep the joint fit,
+``two_taps_<tier>_calibration_12.json`` + ``two_taps_infamily_calibration.json``, validated
+on the ``validation`` ones): the taps *agree* when 5+ of their 6 frequencies were heard
+and the joint fit meets all within 0.1 %. None of 48 holders outside the family agreed
+(with 5–6 heard their joint misfit is 0.13–3.6 %), 13 of 24 in the family did, errors
+≤ 0.11 % (median 0.02 %): the evidence a narrower joint band could rest on, but no holder
+outside the family lands in the cell, so its c cannot be calibrated (MODEL_FORM_JOINT
+unchanged).
+
 ``--by-tier`` calibrates each tier alone and keeps the larger c (the shipped choice: each
 tier covered, not only the pool). ``--write`` puts MODEL_FORM, DELTA_REF_MM and CALIBRATION into bands.py; the comment above
 MODEL_FORM and the numbers in docs/physics.md §5 are then updated by hand from the printout
@@ -141,19 +183,37 @@ def rows(records: list[dict]) -> list[dict]:
         ident = rec["identification"]
         terms = np.asarray(ident.get("objective_terms") or [[math.nan, math.nan]], dtype=float)
         for m, (f, t) in enumerate(zip(p.bending_hz, q.truth.bending_hz)):
-            out.append({"case": rec["name"], "tier": rec.get("tier", "harsh"), "split": rec["split"],
+            out.append({"case": rec["name"], "tier": tier_of(rec), "split": rec["split"],
                         "mode": m + 1, "f": f, "err": abs(f - t), "set": b.set_hz[m], "geom": b.geometry_hz[m],
                         "delta": b.delta_stickout_mm, "group": b.model_form_groups[m], "measured": measured[m],
                         # features known at prediction time, for the normalised-score variants
                         "family": rec.get("family"), "floor": ident["relative_floor"],
                         "obj_freq": float(terms[:, 0].sum()), "obj_shape": float(terms[:, 1].sum()),
-                        "n_measured": int(sum(measured)),
+                        "n_measured": int(sum(measured)), "misfit": raw_misfit(ident),
                         "stickout": asm.stickout * 1e3, "stickout_tapped": case.described.stickout * 1e3,
                         "diameter": rec["tool"]["diameter_mm"], "f_all": list(p.bending_hz)})
         return p
 
     reevaluate([r for r in records if "failed" not in r], band)
     return out
+
+
+def tier_of(rec: dict) -> str:
+    """The corpus tier of a record; the in-family control is a tier of its own, and so are
+    stick-outs read with a gauge (``<tier> gauge``: the geometry part is small there, so
+    the model-form term must carry more of the error)."""
+    from benchmarks.realism.corpus import RULER_MM
+
+    if rec["split"] == "infamily":
+        return "infamily"
+    tier = rec.get("tier", "harsh")
+    return tier if rec.get("stickout_error_mm", RULER_MM) == RULER_MM else f"{tier} gauge"
+
+
+def raw_misfit(ident: dict) -> float:
+    """Largest relative miss of the fitted model on the measured frequencies (no floor) [–]."""
+    pairs = [(m, f) for m, f in zip(ident["bending_measured_hz"], ident["bending_model_hz"]) if m is not None]
+    return max([0.0] + [abs(f / m - 1) for m, f in pairs])
 
 
 def cached_rows(paths, cache: str | None) -> list[dict]:
@@ -164,7 +224,7 @@ def cached_rows(paths, cache: str | None) -> list[dict]:
     for p in paths:
         st = Path(p).stat()
         key = f"{Path(p).resolve()}|{st.st_size}|{st.st_mtime_ns}"
-        if key not in store or any("f_all" not in r for r in store[key]):
+        if key not in store or any("misfit" not in r for r in store[key]):
             store[key] = rows(load([p]))
         out += store[key]
     if cache:
@@ -465,6 +525,75 @@ def variants(cal, val, by_tier: bool = False) -> None:
     leave_one_tier_out(cal, val)
 
 
+#: The peaks' relative precision (MEASUREMENT_FLOOR of taptune.identify.check, the fit
+#: misfit's floor): a fit meeting every measured peak within EXPLAINED × this explains them.
+PRECISION = 5e-4
+EXPLAINED = 2.0
+
+
+def fit_class(r) -> str:
+    """What the fit shows about the model, known at prediction time: ``explained`` when
+    the tap measured all three modes and the fit meets each within EXPLAINED × the peaks'
+    precision, else ``partial``."""
+    return "explained" if r["n_measured"] == 3 and r["misfit"] <= EXPLAINED * PRECISION else "partial"
+
+
+def _rank_correlation(x, y) -> float:
+    """Spearman's rank correlation (ties, e.g. the many predictions that need no c, share
+    their mean rank)."""
+    from scipy.stats import spearmanr
+
+    return float(spearmanr(x, y).statistic)
+
+
+def evidence(cal, val, by_tier: bool = True) -> None:
+    """Does what the fit shows predict the transfer error? (issue 22.) On the calibration
+    rows of holders outside the model family: per evidence group, the rank correlation of
+    the fit's misfit (unfloored) with |error| and with the model-form c each prediction
+    needs, and the 90 % conformal c per misfit tercile; per number of measured modes, the
+    errors and the set + geometry parts, outside and inside the family; then Mondrian
+    cells group × :func:`fit_class` calibrated (each tier alone, the largest kept, the
+    in-family tier among them when given) and measured on the validation rows, beside the
+    shipped c and the set + geometry parts alone (the narrowest any model-form term allows)."""
+    outside = [r for r in cal if r["tier"] != "infamily"]
+    print(f"\nwhat the fit shows vs the error ({len(outside)} calibration predictions outside the family):")
+    for g in bands.GROUPS:
+        rs = [r for r in outside if r["group"] == g]
+        if len(rs) < 6:
+            continue
+        m = np.array([r["misfit"] for r in rs])
+        e = np.array([r["err"] / r["f"] for r in rs])
+        c = np.array([need(r) for r in rs])
+        cuts = np.percentile(m, [100 / 3, 200 / 3])
+        print(f"  {g}: n {len(rs)}, Spearman(misfit, |err|) {_rank_correlation(m, e):+.2f}, "
+              f"(misfit, needed c) {_rank_correlation(m, c):+.2f}")
+        for name, sel in (("low", m <= cuts[0]), ("mid", (m > cuts[0]) & (m <= cuts[1])), ("high", m > cuts[1])):
+            print(f"    {name:4s} misfit {100 * m[sel].min():.3f}–{100 * m[sel].max():.3f} %: n {sel.sum():3d}, |err| median "
+                  f"{100 * np.median(e[sel]):.2f} %, p90 {100 * np.percentile(e[sel], 90):.2f} %, "
+                  f"90 % c {100 * bands.conformal_quantile(c[sel]):.2f} %")
+    for title, rs in (("outside the family", outside), ("in the family", [r for r in cal + val if r["tier"] == "infamily"])):
+        for n in (1, 2, 3):
+            sel = [r for r in rs if r["n_measured"] == n]
+            if not sel:
+                continue
+            e = np.array([r["err"] / r["f"] for r in sel])
+            sg = np.array([math.hypot(r["set"], r["geom"]) / r["f"] for r in sel])
+            print(f"  {title}, {n} mode(s) measured: n {len(sel):3d}, |err| median {100 * np.median(e):.3f} %, "
+                  f"p90 {100 * np.percentile(e, 90):.2f} %; set + geometry median {100 * np.median(sg):.2f} %")
+    cells = calibrate(cal, by_tier=by_tier, cell=fit_class)
+    print("\nMondrian cells evidence group × fit class (" + ("each tier alone, the largest kept" if by_tier else "pooled")
+          + "): " + ", ".join(f"{k} {100 * v:.3f} % (n {sum(key_of(r, False, fit_class) == k for r in cal)})"
+                              for k, v in cells.items()))
+    for tier in sorted({r["tier"] for r in cal}):
+        rs = [r for r in cal if r["tier"] == tier]
+        print(f"  {tier}: " + ", ".join(f"{k} {100 * v:.3f} % (n {sum(key_of(r, False, fit_class) == k for r in rs)})"
+                                        for k, v in calibrate(rs, cell=fit_class).items()))
+    for title, rs in by_set(val).items():
+        print("  " + line(f"{title}: set + geometry only", stats(rs, ZERO)))
+        print("  " + line(f"{title}: shipped c", stats(rs, bands.MODEL_FORM)))
+        print("  " + line(f"{title}: c per group × fit class", stats(rs, cells, cell=fit_class)))
+
+
 def write_constants(c: dict, delta_ref: float, note: str) -> None:
     """Put the calibrated MODEL_FORM (and Δref, the note) into taptune/identify/bands.py."""
     path = REPO / "taptune" / "identify" / "bands.py"
@@ -478,6 +607,50 @@ def write_constants(c: dict, delta_ref: float, note: str) -> None:
         raise SystemExit(f"bands.py: could not find the MODEL_FORM / DELTA_REF_MM / CALIBRATION lines ({n1, n2, n3})")
     path.write_text(text)
     print(f"wrote MODEL_FORM = {{{body}}}, DELTA_REF_MM = {ref} into {path}")
+
+
+#: Two taps agree when the joint fit heard this many of their six frequencies ...
+AGREED_HEARD = 5
+
+
+def agreement_rows(paths) -> list[dict]:
+    """The ``rows`` of two-tap results whose records keep the joint fit (``identification``),
+    each marked ``agreed`` (at least :data:`AGREED_HEARD` frequencies heard over both taps,
+    all met within EXPLAINED × the peaks' precision); in-family rows get their own tier."""
+    out = []
+    for rec in load(paths):
+        ident = rec.get("identification")
+        if "failed" in rec or ident is None:
+            continue
+        heard = sum(f is not None for tap in ident["bending_measured_hz"] for f in tap)
+        agreed = heard >= AGREED_HEARD and ident["relative_floor"] <= EXPLAINED * PRECISION
+        for r in rec["rows"]:
+            out.append({**r, "tier": "infamily" if r["split"] == "infamily" else r["tier"],
+                        "agreed": agreed, "heard": heard})
+    return out
+
+
+def joint_agreement(cal_paths, val_paths) -> None:
+    """Does the two taps' agreement predict the error? Per tier, how many holders agree and
+    their errors; Mondrian cells group × agreement calibrated each tier alone (the largest
+    kept) and measured on the validation rows beside MODEL_FORM_JOINT."""
+    cal, val = agreement_rows(cal_paths), agreement_rows(val_paths)
+    print(f"\ntwo taps' agreement ({AGREED_HEARD}+ of 6 frequencies heard, all met within "
+          f"{100 * EXPLAINED * PRECISION:g} %):")
+    for title, rs in (("calibration", cal), ("validation", val)):
+        for tier in sorted({r["tier"] for r in rs}):
+            sel = [r for r in rs if r["tier"] == tier]
+            ag = [r for r in sel if r["agreed"]]
+            e = [100 * r["err"] / r["f"] for r in ag]
+            print(f"  {title} {tier}: {len(ag) // 3} of {len(sel) // 3} holders agree"
+                  + (f", |err| median {np.median(e):.3f} %, max {np.max(e):.2f} %" if e else ""))
+    cell = lambda r: "agreed" if r["agreed"] else "not"  # noqa: E731
+    c = calibrate(cal, by_tier=True, cell=cell)
+    print("  c per group × agreement: " + ", ".join(f"{k} {100 * v:.3f} %" for k, v in c.items()))
+    for tier in sorted({r["tier"] for r in val}):
+        rs = [r for r in val if r["tier"] == tier]
+        print("  " + line(f"{tier} (validation), joint c", stats(rs, bands.MODEL_FORM_JOINT)))
+        print("  " + line(f"{tier} (validation), agreement cells", stats(rs, c, cell=cell)))
 
 
 def joint(cal_paths, val_paths, write: bool) -> None:
@@ -554,6 +727,8 @@ def main(argv=None) -> int:
                                                             "per group (every tier covered, not only the pool)")
     ap.add_argument("--cache", help="a JSON file keeping the per-prediction rows of each results file "
                                      "(by path, size and time): a second run skips the re-prediction")
+    ap.add_argument("--evidence", action="store_true", help="also print whether what the fit shows (misfit, "
+                                                             "measured modes) predicts the error, and cells by it")
     ap.add_argument("--joint", action="store_true", help="calibrate MODEL_FORM_JOINT on two-tap results "
                                                           "(benchmarks/realism/two_taps.py) instead")
     ap.add_argument("--gauge", action="store_true", help="records whose stick-outs were read with a gauge (run "
@@ -568,6 +743,8 @@ def main(argv=None) -> int:
         ap.error("--records is required (or --rewrite-results)")
     if args.joint:
         joint(args.records, args.validate, args.write)
+        if args.evidence:
+            joint_agreement(args.records, args.validate)
         return 0
     if args.gauge:
         gauge(args.records, args.validate, args.cache)
@@ -590,6 +767,8 @@ def main(argv=None) -> int:
         print("  " + line(title, stats(rs, bands.MODEL_FORM)))
     if args.variants:
         variants(cal, val, args.by_tier)
+    if args.evidence:
+        evidence(cal, val, args.by_tier)
     if args.write:
         tiers = " + ".join(sorted({r["tier"] for r in cal}))
         n_cases = len({r["case"] for r in cal})

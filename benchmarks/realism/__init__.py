@@ -50,5 +50,10 @@ for ``validation`` (24), ``calibration`` (24) and ``infamily`` (12). Issue tier 
 issue-9 work (taptune main f1b05df): ``before_issue_<split>.json`` (24 each). The code of
 today: ``results_<tier>_<split>[_<start>].json`` (calibration 72 holders per tier,
 validation 48, in-family 12); the bands are calibrated on them with
-``benchmarks/calibrate_bands.py`` (its docstring has the whole loop).
+``benchmarks/calibrate_bands.py`` (its docstring has the whole loop). Holders the model
+describes, stick-out exact and stated to ±0.05 mm (``run --split infamily --stickout-error
+0.05``, 48 holders): ``results_infamily_gauge_{calibration,validation,validation_30}.json``
+(indices 12–29 / 0–11 / 30–47); their two-tap runs ``two_taps_infamily_<split>.json``,
+and the first 12 holders of each tier and split tapped twice, with the joint fit's
+misfit (``two_taps_<tier>_<split>_12.json``).
 """

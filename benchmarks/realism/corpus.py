@@ -150,7 +150,7 @@ class Case:
     true_od_factors: tuple = field(default=())
     true_flute_ratio: float = 0.8
     tier: str = "harsh"
-    stickout_error_mm: float = RULER_MM  # the largest stick-out reading error (0 in the family)
+    stickout_error_mm: float = RULER_MM  # the largest stick-out reading error (0 in the family, or the one stated)
 
     def described_at(self, stickout_mm: float) -> Assembly:
         """The described assembly at another stick-out [mm] (what the user would predict)."""
@@ -282,7 +282,8 @@ def make_case(split: str, index: int, in_family: bool = False, tier: str = "hars
     ``stickout_error_mm``: the largest error of every stick-out reading (uniform; default
     a ruler). Another value draws the same case with every reading error scaled (the same
     random numbers), and the described assembly states it as its ``stickout_tolerance``:
-    the user who measured with a gauge and said so.
+    the user who measured with a gauge and said so. In the family (``infamily``) every
+    stick-out is exact and such a value is only stated (0 states nothing).
     """
     if tier not in TIERS:
         raise ValueError(f"unknown tier {tier!r}: use {' or '.join(TIERS)}")
@@ -291,9 +292,17 @@ def make_case(split: str, index: int, in_family: bool = False, tier: str = "hars
     seed = SPLIT_SEEDS[split] + index + (ISSUE_SEED_OFFSET if tier == "issue" else 0)
     rng = np.random.default_rng(seed)
     try_ = _try_case if tier == "harsh" else _try_issue_case
+    in_family = in_family or split == "infamily"
     for _ in range(100):
-        case = try_(rng, split, index, seed, in_family or split == "infamily", stickout_error_mm)
+        case = try_(rng, split, index, seed, in_family, stickout_error_mm)
         if case is not None:
+            if in_family and stickout_error_mm not in (RULER_MM, 0.0):
+                # The exact stick-out, stated to this tolerance (a gauge): the in-family
+                # control of a user who measured well and said so (0, what in-family
+                # records store otherwise, keeps the assembly's default tolerance).
+                tol = Tolerances(stickout=stickout_error_mm * MM)
+                case = replace(case, described=replace(case.described, tolerances=tol),
+                               stickout_error_mm=stickout_error_mm)
             return case
     raise RuntimeError(f"no valid geometry for {split} {index} ({tier} tier)")
 

@@ -101,7 +101,8 @@ def run_case(split: str, index: int, seed: int = 0, ablate: str | None = None, t
     cpu = time.process_time() - t0
     analysis = analyses[0]
     out["labels"] = judge_labels(case, analysis, audibility_margins(case, analysis))
-    out["peaks"] = [{"hz": round(p.hz, 2), "kind": p.kind, "mode": p.mode, "level_db": round(p.level_db, 2)}
+    out["peaks"] = [{"hz": round(p.hz, 2), "kind": p.kind, "mode": p.mode, "level_db": round(p.level_db, 2),
+                     "scatter_hz": round(p.scatter_hz, 3)}
                     for p in analysis.peaks]
     out["identification"] = {
         "param_sets": [p.to_dict() for p in result.param_sets],

@@ -63,7 +63,11 @@ PINNED_SPREAD = 0.002
 #: not kept (calibrate_bands.py --variants): c per group and mode (wider, harsh 87.5 %),
 #: the set part × 0.5 or × 0 (wider, lower coverage), Δref 5/20/40 mm and no growth (the
 #: four within 0.06 % in median half-width), a pinned threshold of 0.1–2 % instead of
-#: 0.2 % (the same within 0.2 %, first calibration).
+#: 0.2 % (the same within 0.2 %, first calibration). Tried and not kept (2026-11-27,
+#: ``calibrate_bands.py --evidence``): c conditioned on what the fit shows. One tap's
+#: misfit barely ranks the errors (Spearman +0.16 pinned, +0.03 free, +0.18 unknown), and
+#: a mode pinned only when the fit meets all three modes within 2 × 0.05 % needs c 0.84 %
+#: on the harsh tier's gauge-read holders (0.35 % ruler-read): no narrower band.
 MODEL_FORM = {"pinned": 0.00566, "free": 0.01074, "unknown": 0.02884}
 #: The same for a holder identified jointly from two or more taps (at different
 #: stick-outs), calibrated alike on joint identifications of the corpus

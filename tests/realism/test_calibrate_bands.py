@@ -44,3 +44,52 @@ def test_mondrian_cells_get_their_own_coefficient():
     assert set(c) == {"pinned/True", "pinned/False"}
     s = stats(rows, c, cell=lambda r: r["mode"] == 1)
     assert s["coverage"] >= 0.9
+
+
+def test_fit_class_and_tiers_known_at_prediction_time():
+    from benchmarks.calibrate_bands import fit_class, tier_of
+
+    assert fit_class({"n_measured": 3, "misfit": 8e-4}) == "explained"
+    assert fit_class({"n_measured": 3, "misfit": 2e-3}) == "partial"  # the model misses a peak
+    assert fit_class({"n_measured": 2, "misfit": 0.0}) == "partial"  # five parameters meet two modes anyway
+    assert tier_of({"split": "infamily", "tier": "harsh", "stickout_error_mm": 0.05}) == "infamily"
+    assert tier_of({"split": "validation", "tier": "issue", "stickout_error_mm": 0.4}) == "issue"
+    assert tier_of({"split": "validation", "tier": "harsh", "stickout_error_mm": 0.05}) == "harsh gauge"
+
+
+def test_evidence_report_runs_on_rows(capsys):
+    from benchmarks.calibrate_bands import evidence
+
+    rng = np.random.default_rng(5)
+    rows = []
+    for split in ("calibration", "validation"):
+        for r in _rows(6 if split == "calibration" else 7, 120):
+            r.update(split=split, n_measured=int(rng.integers(1, 4)), misfit=float(rng.uniform(0, 2e-3)),
+                     group=str(rng.choice(["pinned", "free", "unknown"])))
+            rows.append(r)
+    evidence([r for r in rows if r["split"] == "calibration"], [r for r in rows if r["split"] == "validation"])
+    out = capsys.readouterr().out
+    assert "Spearman(misfit, |err|)" in out and "group × fit class" in out and "issue validation" in out
+
+
+def test_two_taps_agree_only_with_five_frequencies_met_within_the_precision(tmp_path):
+    import json
+
+    from benchmarks.calibrate_bands import agreement_rows
+
+    def rec(name, measured, floor, split="validation"):
+        rows = [{"case": name, "tier": "harsh", "split": split, "mode": n, "f": 1e4, "err": 1.0, "set": 0.0,
+                 "geom": 0.0, "delta": 10.0, "group": "pinned", "measured": True} for n in (1, 2, 3)]
+        return {"name": name, "rows": rows,
+                "identification": {"bending_measured_hz": measured, "bending_model_hz": measured,
+                                   "relative_floor": floor}}
+
+    six, four = [[1.0, 2.0, 3.0], [1.1, 2.1, 3.1]], [[1.0, 2.0, None], [1.1, 2.1, None]]
+    cases = [rec("a", six, 5e-4), rec("b", six, 3e-3), rec("c", four, 5e-4), rec("d", six, 5e-4, "infamily"),
+             {"name": "e", "failed": "no tap"}]
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps({"cases": cases}))
+    rows = agreement_rows([path])
+    agreed = {r["case"]: r["agreed"] for r in rows}
+    assert agreed == {"a": True, "b": False, "c": False, "d": True}
+    assert {r["tier"] for r in rows if r["case"] == "d"} == {"infamily"}
