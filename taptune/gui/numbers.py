@@ -22,6 +22,8 @@ def determined(value: float, spread: float) -> bool:
     return math.isfinite(value) and math.isfinite(spread) and abs(spread) <= abs(value)
 
 
-def date_text(iso: str) -> str:
-    """A stored UTC time (``2026-11-27T08:21:49Z``) as every view shows it: ``2026-11-27 08:21:49``."""
-    return iso.replace("T", " ").rstrip("Z")
+def date_text(iso: str | None) -> str:
+    """A stored UTC time (``2026-11-27T08:21:49Z``) as every view and ``library list`` show it: ``2026-11-27 08:21``."""
+    from taptune.library.schema import date_label
+
+    return date_label(iso)

@@ -51,11 +51,14 @@ def test_without_the_fit_the_guidance_keeps_mode_3_too(loud_neighbour):
 
 
 @pytest.mark.slow
-def test_a_table_resonance_and_an_interface_mode_are_not_taken_for_modes_2_and_3():
+def test_a_miss_beyond_the_storing_limit_leaves_the_labelling_to_the_poor_fit_refusal():
     # In-family inf009 clamped again 10 mm out (its second tap of a joint fit): modes 2 and
     # 3 (13.0, 16.5 kHz) do not ring; a table resonance at 8.94 kHz and the interface's
-    # 10.37 kHz mode are loud. Taking them for modes 2 and 3 left the fit 22 % off (the
-    # joint fit 25 %); the model explains mode 1 alone within the peaks' precision.
+    # 10.37 kHz mode are loud. Taking them for modes 2 and 3 leaves the fit 22 % off; mode 1
+    # alone would be explained within the peaks' precision. A miss that large is what a
+    # wrong assembly file gives too (a hydraulic chuck's tap with an ER32 file: 10.5 %), so
+    # the loud labelling stays and `taptune identify` refuses to store the fit, naming the
+    # miss: dropping modes there would store a wrong holder without a word.
     from benchmarks.realism.audio import record
     from benchmarks.realism.corpus import elsewhere
 
@@ -63,6 +66,5 @@ def test_a_table_resonance_and_an_interface_mode_are_not_taken_for_modes_2_and_3
     tap = elsewhere(case, case.queries[0].stickout_mm)
     analysis = analyse_for_assembly(record(tap), tap.described)
     found = analysis.bending_by_mode()
-    assert list(found) == [1] and abs(found[1] / tap.truth.bending_hz[0] - 1) < 1e-3
-    said = [w for w in analysis.warnings if "peaks at" in w and "left as other" in w]
-    assert len(said) == 1 and "would miss by 2" in said[0]
+    assert len(found) == 3 and abs(found[1] / tap.truth.bending_hz[0] - 1) < 1e-3
+    assert not [w for w in analysis.warnings if "left as other" in w]
