@@ -4,6 +4,9 @@ A tap is a hard, short impact: the envelope jumps from the noise floor by orders
 magnitude within a fraction of a millisecond and then decays for 1–30 ms per mode. Hum,
 room noise and the ring-down of earlier taps are slow by comparison, so an envelope
 threshold a multiple of the median envelope finds taps without knowing their number.
+Not every sharp rise is a tap: one far below the recording's taps (a thump, a click) and
+one that does not ring down (a word, a note, a machine; :func:`rings_down`,
+:func:`ring_time`) are kept apart as ``rejected`` events, never averaged in.
 """
 
 from __future__ import annotations
