@@ -18,8 +18,8 @@ from taptune.io.audio import RECOMMENDED_SAMPLE_RATE, Recording
 from taptune.signal.bandwidth import effective_bandwidth, hidden_modes
 from taptune.signal.labels import (NOTE_STATIONARY, LabelOptions, faint_windows, guided_windows, interface_bands,
                                    interface_growth, label_peaks)
-from taptune.signal.peaks import (FIT_STARTS_S, Peak, harmonic_fundamental, leakage_lobes, pick_faint_peaks, pick_peaks, refine_peaks,
-                                  tap_scatter)
+from taptune.signal.peaks import (FIT_STARTS_S, Peak, harmonic_fundamental, leakage_lobes, pick_faint_peaks,
+                                  pick_peaks, refine_peaks, tap_scatter)
 from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
                                      tap_segments, window_leakage_db)
 from taptune.signal.taps import NEAR_FULL_SCALE, Tap, find_taps, full_scale_runs, to_mono
@@ -275,8 +275,8 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
     idx, hz, lev, prom, snr, over = pick_peaks(freq, mag, floor, prominence_db=o.prominence_db,
                                             min_snr_db=o.min_snr_db, min_local_db=o.min_local_db,
                                             fmin_hz=o.fmin_hz, fmax_hz=fmax, max_peaks=o.max_peaks)
-    # Window leakage of a long ring is no mode (peaks.leakage_lobes): the envelope reaches
-    # 40 native bins out, where the fade has taken the side lobes far below any mode.
+    # Window leakage of a long ring is no mode (peaks.leakage_lobes), judged out to 40
+    # native bins (1/segment) from each louder peak: beyond, its side lobes are > 40 dB down.
     n_fft = 2 * (freq.size - 1)
     shortest = min(min(t.end - t.onset for t in used) + int(round(o.pre_onset_s * fs)), n_disp)
     leak, null = window_leakage_db(shortest, o.fade_fraction, n_fft, int(40 * n_fft / shortest))
@@ -307,8 +307,8 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
                         damping_ratio=None if np.isnan(zeta[k]) else float(zeta[k]))
                 for k, q in enumerate(peaks_in)]
 
-    return {"taps": taps, "rejected": [t for t in events if t.rejected], "used": used, "freq": freq, "tap_mag": tap_mag, "mag": mag,
-            "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
+    return {"taps": taps, "rejected": [t for t in events if t.rejected], "used": used, "freq": freq,
+            "tap_mag": tap_mag, "mag": mag, "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
             "top_db": top, "oversample": 2 * (freq.size - 1) / n_disp,
             "stationary": [bool(v) for v in stationary], "refine": refine, "leak_reach_hz": 40 * fs / shortest}
 

@@ -68,7 +68,8 @@ def speech_like(seed=0, fs=48000, seconds=3.0, level=0.3):
     pulses[::int(fs / 120)] = 1.0
     formants = sum(1 / (1 + ((f - fc) / bw) ** 2) for fc, bw in ((700, 90), (1200, 110), (2600, 160)))
     voiced = np.fft.irfft(np.fft.rfft(pulses) * formants, n)
-    for start in np.arange(0.2, seconds - 0.3, 0.25) + rng.uniform(-0.03, 0.03, int((seconds - 0.5) / 0.25) + 1)[:len(np.arange(0.2, seconds - 0.3, 0.25))]:
+    starts = np.arange(0.2, seconds - 0.3, 0.25)
+    for start in starts + rng.uniform(-0.03, 0.03, starts.size):
         a, length = int(start * fs), int(rng.uniform(0.06, 0.2) * fs)
         env = np.sin(np.pi * np.arange(length) / length) ** 0.5
         x[a:a + length] += voiced[a:a + length] / np.max(np.abs(voiced)) * env
