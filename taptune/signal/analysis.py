@@ -334,7 +334,7 @@ def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions, rejected=()) -
     if faint:
         below = 20 * np.log10(max(t.peak for t in taps) / max(max(t.peak for t in faint), 1e-300))
         w.append(f"{name}: {len(faint)} faint sound event{'s' if len(faint) > 1 else ''} "
-                 f"({below:.0f} dB or more below the loudest tap: a thump, a click?) "
+                 f"({below:.0f} dB{' or more' if len(faint) > 1 else ''} below the loudest tap: a thump, a click?) "
                  f"{'are' if len(faint) > 1 else 'is'} not counted as a tap")
     other = [t for t in rejected if t.rejected != "faint"]
     if other:
