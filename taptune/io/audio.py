@@ -203,9 +203,10 @@ def read_audio(path) -> Recording:
     except (sf.LibsndfileError, RuntimeError, ValueError, TypeError, EOFError) as err:
         detail = " ".join(str(err).split()) or type(err).__name__
         message = f"{name}: not a readable audio file ({detail})"
-        if "not recognised" not in detail.lower():
+        if "not recognised" not in detail.lower() and "malformed" not in detail.lower():
             raise InputError(message) from None
-        # A phone file with a misleading suffix: FFmpeg may know it; if not, libsndfile's
+        # A phone file with a misleading suffix, or one libsndfile misjudges (it calls some
+        # valid short Ogg Opus files "malformed"): FFmpeg may read it; if not, libsndfile's
         # message is the one to show.
         try:
             data, rate, subtype = _read_av(p, name)

@@ -16,12 +16,13 @@ import numpy as np
 from taptune.errors import InputError
 from taptune.io.audio import RECOMMENDED_SAMPLE_RATE, Recording
 from taptune.signal.bandwidth import effective_bandwidth, hidden_modes
-from taptune.signal.labels import (LabelOptions, faint_windows, guided_windows, interface_bands,
+from taptune.signal.labels import (NOTE_STATIONARY, LabelOptions, faint_windows, guided_windows, interface_bands,
                                    interface_growth, label_peaks)
-from taptune.signal.peaks import FIT_STARTS_S, Peak, pick_faint_peaks, pick_peaks, refine_peaks, tap_scatter
+from taptune.signal.peaks import (FIT_STARTS_S, Peak, harmonic_fundamental, leakage_lobes, pick_faint_peaks,
+                                  pick_peaks, refine_peaks, tap_scatter)
 from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
-                                     tap_segments)
-from taptune.signal.taps import Tap, find_taps, full_scale_runs, to_mono
+                                     tap_segments, window_leakage_db)
+from taptune.signal.taps import NEAR_FULL_SCALE, Tap, find_taps, full_scale_runs, to_mono
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,9 @@ class SpectrumOptions:
     #: stays below ~1.7x its median, and taps at 20 dB SNR still clear it.
     tap_threshold: float = 5.0
     min_tap_interval_s: float = 0.3
+    #: An event this far below the loudest tap is no tap (a thump, a click, a codec's
+    #: pre-echo): taps by hand vary by up to ~20 dB (see ``taps.find_taps``).
+    faint_event_db: float = 24.0
     pre_onset_s: float = 2e-3
     segment_s: float = 0.25
     fade_fraction: float = 0.1
@@ -194,10 +198,15 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
         raise InputError(f"{name}: {rec.duration_s * 1000:.1f} ms is shorter than one tap "
                          f"(need at least {min_len * 1000:.0f} ms)" + _read_notes(rec))
     mono = to_mono(x_raw, fs, o.tap_smooth_s)
-    taps = find_taps(mono, fs, raw=x_raw, subtype=rec.subtype, smooth_s=o.tap_smooth_s,
-                     threshold=o.tap_threshold, min_interval_s=o.min_tap_interval_s,
-                     pre_onset_s=o.pre_onset_s, segment_s=o.segment_s,
-                     double_hit_window_s=o.double_hit_window_s)
+    events = find_taps(mono, fs, raw=x_raw, subtype=rec.subtype, smooth_s=o.tap_smooth_s,
+                       threshold=o.tap_threshold, min_interval_s=o.min_tap_interval_s,
+                       pre_onset_s=o.pre_onset_s, segment_s=o.segment_s,
+                       double_hit_window_s=o.double_hit_window_s, faint_db=o.faint_event_db)
+    taps = [t for t in events if not t.rejected]
+    if events and not taps:
+        raise InputError(f"{name}: does not look like a tap: no sharp onset followed by a ring-down in "
+                         f"{len(events)} sound event{'s' if len(events) > 1 else ''} (speech, music or a running "
+                         "machine?); record taps on the tool tip in a quiet moment")
     if not taps:
         why = _unusable(rec)
         raise InputError(f"{name}: no tap found" + (f": {why}" if why else
@@ -213,14 +222,14 @@ def _peak_spectra(rec: Recording, o: SpectrumOptions):
     freq, spec = spectra(tap_segments(mono, fs, used, pre, n_disp, o.fade_fraction), fs, n_fft)
     tap_mag = np.abs(spec)
     mag = tap_mag.mean(axis=0)
-    noise = noise_segments(mono, fs, taps, n_disp)
+    noise = noise_segments(mono, fs, events, n_disp)
     noise_mag = None
     if noise.shape[0]:
         noise_mag = np.abs(spectra(fade_out(noise, o.fade_fraction), fs, n_fft)[1]).mean(axis=0)
         floor = smooth_floor(freq, noise_mag, q=50)
     else:
         floor = smooth_floor(freq, mag, width_hz=1000.0, q=10)
-    return mono, taps, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor
+    return mono, events, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor
 
 
 def _read_notes(rec: Recording) -> str:
@@ -251,7 +260,8 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
     Returns
     -------
     dict
-        ``taps, used, freq, tap_mag, mag, noise_mag``; ``peaks`` (list of Peak, kind
+        ``taps, used, freq, tap_mag, mag, noise_mag``; ``rejected`` (the events that are
+        no tap: faint, or without a ring-down); ``peaks`` (list of Peak, kind
         "other", ascending), ``idx`` (their bins), ``over`` (their height over the floor
         [dB]), ``floor`` (the smoothed noise floor), ``top_db``, ``oversample`` (FFT bins per
         native bin of a tap segment), ``stationary`` (list of bool) and
@@ -259,11 +269,19 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
         :func:`~taptune.signal.peaks.refine_peaks`).
     """
     fs = rec.sample_rate
-    mono, taps, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor = _peak_spectra(rec, o)
+    mono, events, used, seg_n, n_disp, freq, tap_mag, mag, noise_mag, floor = _peak_spectra(rec, o)
+    taps = [t for t in events if not t.rejected]
     fmax = min(o.fmax_hz or np.inf, 0.98 * fs / 2)
     idx, hz, lev, prom, snr, over = pick_peaks(freq, mag, floor, prominence_db=o.prominence_db,
                                             min_snr_db=o.min_snr_db, min_local_db=o.min_local_db,
                                             fmin_hz=o.fmin_hz, fmax_hz=fmax, max_peaks=o.max_peaks)
+    # Window leakage of a long ring is no mode (peaks.leakage_lobes), judged out to 40
+    # native bins (1/segment) from each louder peak: beyond, its side lobes are > 40 dB down.
+    n_fft = 2 * (freq.size - 1)
+    shortest = min(min(t.end - t.onset for t in used) + int(round(o.pre_onset_s * fs)), n_disp)
+    leak, null = window_leakage_db(shortest, o.fade_fraction, n_fft, int(40 * n_fft / shortest))
+    keep = ~leakage_lobes(idx, lev, leak, null)
+    idx, hz, lev, prom, snr, over = idx[keep], hz[keep], lev[keep], prom[keep], snr[keep], over[keep]
     stationary = np.zeros(len(idx), dtype=bool)
     if noise_mag is not None:
         for k, i in enumerate(idx):
@@ -289,25 +307,40 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
                         damping_ratio=None if np.isnan(zeta[k]) else float(zeta[k]))
                 for k, q in enumerate(peaks_in)]
 
-    return {"taps": taps, "used": used, "freq": freq, "tap_mag": tap_mag, "mag": mag,
-            "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
+    return {"taps": taps, "rejected": [t for t in events if t.rejected], "used": used, "freq": freq,
+            "tap_mag": tap_mag, "mag": mag, "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
             "top_db": top, "oversample": 2 * (freq.size - 1) / n_disp,
-            "stationary": [bool(v) for v in stationary], "refine": refine}
+            "stationary": [bool(v) for v in stationary], "refine": refine, "leak_reach_hz": 40 * fs / shortest}
 
 
-def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions) -> list[str]:
+def _tap_warnings(taps: list[Tap], name: str, o: SpectrumOptions, rejected=()) -> list[str]:
     w = []
     n = len(taps)
-    n_clip = sum(t.clipped for t in taps)
+    clipped = [t for t in taps if t.clipped]
     n_dbl = sum(t.double_hit for t in taps)
     n_used = sum(t.used for t in taps)
-    if n_clip:
-        w.append(f"{name}: clipped at full scale in {n_clip} of {n} taps: the levels are unreliable; tap softer or "
+    if clipped:
+        level = max(t.clip_level for t in clipped)
+        how = ("clipped at full scale" if level >= NEAR_FULL_SCALE else
+               f"flat-topped at {20 * np.log10(level):.1f} dBFS (a limiter or an overloaded preamp holds the peaks "
+               "below full scale)")
+        w.append(f"{name}: {how} in {len(clipped)} of {n} taps: the levels are unreliable; tap softer or "
                  "lower the input gain" + (" (the clipped taps are left out of the average)" if n_used < n
                                            else " (used anyway: no tap is clean)"))
     if n_dbl:
         w.append(f"{n_dbl} of {n} taps are double hits" + (": left out of the average" if n_used < n
                                                            else ": used anyway"))
+    faint = [t for t in rejected if t.rejected == "faint"]
+    if faint:
+        below = 20 * np.log10(max(t.peak for t in taps) / max(max(t.peak for t in faint), 1e-300))
+        w.append(f"{name}: {len(faint)} faint sound event{'s' if len(faint) > 1 else ''} "
+                 f"({below:.0f} dB{' or more' if len(faint) > 1 else ''} below the loudest tap: a thump, a click?) "
+                 f"{'are' if len(faint) > 1 else 'is'} not counted as a tap")
+    other = [t for t in rejected if t.rejected != "faint"]
+    if other:
+        w.append(f"{name}: {len(other)} sound event{'s' if len(other) > 1 else ''} at "
+                 f"{', '.join(f'{t.time_s:.2f}' for t in other[:5])} s {'do' if len(other) > 1 else 'does'} not look "
+                 "like a tap (no ring-down after the onset: speech, music, a machine?): left out")
     if n_used == 1:
         w.append("a single tap: no tap-to-tap scatter; tap several times for a steadier average")
     best = max(t.snr_db for t in taps)
@@ -383,6 +416,19 @@ def _faint_peaks(r: dict, labeled: list[Peak], expected_hz, bounds_hz, spread_hz
     return out
 
 
+def _without_unfitted_lobes(peaks: list[Peak], reach_hz: float, below_db: float = 20.0) -> list[Peak]:
+    """The peaks without the "other" ones that no pole fit could refine (no damping value)
+    lying within ``reach_hz`` of a peak at least ``below_db`` louder: the leakage of a long
+    ring that stands a little above the window's ideal side lobes (its ring beats or is
+    reflected) is no decaying mode, so the fit fails on it. Stationary and faint peaks are
+    not fitted at all and stay, as do labelled ones."""
+    def lobe(q):
+        return (q.kind == "other" and q.damping_ratio is None and q.reliability == "clear"
+                and q.note != NOTE_STATIONARY
+                and any(abs(o.hz - q.hz) <= reach_hz and o.level_db >= q.level_db + below_db for o in peaks))
+    return [q for q in peaks if not lobe(q)]
+
+
 def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", expected_hz=None,
                       bounds_hz=None, options: SpectrumOptions = SpectrumOptions(),
                       interface_tap: Recording | None = None, spread_hz=None, found: dict | None = None) -> SpectrumAnalysis:
@@ -425,7 +471,11 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
         why = _unusable(recording)
         raise InputError(f"{name}: no spectral peak stands out of the noise" + (f": {why}" if why else ""))
     # What reading found (a WAV cut short) first, then the taps'.
-    warnings = list(recording.warnings) + _tap_warnings(r["taps"], name, o)
+    warnings = list(recording.warnings) + _tap_warnings(r["taps"], name, o, r.get("rejected", ()))
+    pitch = harmonic_fundamental([q.hz for q in peaks], [q.level_db for q in peaks])
+    if pitch is not None:
+        warnings.append(f"{name}: does not look like a tap: the loud peaks form a harmonic series on {pitch:.0f} Hz "
+                        "(a voice or a musical note), while a tapped tool rings at unrelated frequencies")
     bands, w = interface_bands(interface, o.band_table)
     if w:
         warnings.append(w)
@@ -464,6 +514,7 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
               for q, stat in zip(labeled, stationary)]
     refined = r["refine"](labeled, effort, bins, over)
     labeled = sorted((q if q.reliability == "faint" else rq for q, rq in zip(labeled, refined)), key=lambda q: q.hz)
+    labeled = _without_unfitted_lobes(labeled, r.get("leak_reach_hz", 0.0))
     taken = [q for q in labeled if q.kind == "bending" and q.reliability == "faint"]
     if taken:
         warnings.append(faint_warning(name, taken))

@@ -151,7 +151,9 @@ class LabelOptions:
         Peaks less prominent than this pay up to 1 unit, in proportion.
     min_guess_hz : float
         Without model guidance, bending guesses are taken above this frequency
-        (free-free tool-holder assemblies have f1 of a few kHz).
+        (free-free tool-holder assemblies have f1 of a few kHz: a 1 kHz f1 would take a
+        steel bar about 0.5 m long at 60 mm diameter); loud peaks below it are named in a
+        warning, never guessed.
     max_candidates : int
         Candidates per mode considered (the nearest to the expected frequency); loud
         peaks inside the mode's bounds are considered too, however far.
@@ -529,6 +531,14 @@ def label_peaks(peaks: list[Peak], *, bands=(), expected_hz=None, bounds_hz=None
         if pool:
             warnings.append("no assembly given: the bending labels are a best guess "
                             "(the most prominent peaks outside the interface band)")
+        low = [peaks[i] for i in range(p) if cand[i] and peaks[i].hz < options.min_guess_hz
+               and peaks[i].level_db >= options.loud_level_db]
+        if low:
+            loudest = max(low, key=lambda q: q.level_db)
+            warnings.append(f"no assembly given: the loud peak{'s' if len(low) > 1 else ''} below "
+                            f"{options.min_guess_hz:.0f} Hz (loudest {loudest.hz:.0f} Hz) cannot be bending: a free-free "
+                            "tool-holder assembly's first bending mode rings at a few kHz; is this a tap on a "
+                            "tool-holder assembly? (give the assembly file for labels the model can check)")
     out = apply_labels(peaks, modes, use_bands, stationary=stat, grown=grown,
                        source="model" if expected_hz is not None else "guess")
     warnings.extend(missing_warnings(modes, n_sought))

@@ -240,6 +240,79 @@ def pick_peaks(freq_hz, mag, floor, *, prominence_db: float = 6.0, min_snr_db: f
     return idx, f[idx] + d * df, lev, prom, local, over
 
 
+def leakage_lobes(idx, level_db, leakage_db, first_null: int, margin_db: float = 3.0) -> np.ndarray:
+    """Which picked peaks are side lobes of a louder peak's window leakage, not modes.
+
+    A mode still ringing when its segment ends (a xylophone bar, a guitar body, a lightly
+    damped holder mode in a short segment) is cut off by the window, and its peak grows
+    side lobes about one native bin (1/segment) apart: a ring at 297.5 Hz in 0.25 s
+    segments shows "peaks" near ±10 and ±15 Hz. A peak is such a lobe when it lies
+    beyond the main lobe of a louder peak (past its first null) and no higher than the
+    window's own side-lobe envelope at that distance (:func:`~taptune.signal.spectrum.window_leakage_db`,
+    the undamped worst case) plus ``margin_db``. A real mode there would stand above
+    the envelope; one hidden below it cannot be told from leakage with these segments.
+
+    Parameters
+    ----------
+    idx : array_like of int, shape (p,)
+        Bins of the picked peaks.
+    level_db : array_like, shape (p,)
+        Their levels [dB].
+    leakage_db : ndarray
+        Side-lobe envelope per bin offset [dB re the peak] (non-increasing).
+    first_null : int
+        The main lobe's first minimum [bins].
+
+    Returns
+    -------
+    ndarray of bool, shape (p,)
+        True for a side lobe.
+    """
+    b = np.asarray(idx, dtype=int)
+    lev = np.asarray(level_db, dtype=np.float64)
+    lobe = np.zeros(b.size, dtype=bool)
+    reach = len(leakage_db) - 1
+    for k in range(b.size):
+        d = np.abs(b - b[k])
+        near = (d >= first_null) & (d <= reach) & (lev > lev[k])
+        if np.any(near):
+            allowed = lev[near] + np.asarray(leakage_db)[d[near]] + margin_db
+            lobe[k] = bool(np.any(lev[k] <= allowed))
+    return lobe
+
+
+def harmonic_fundamental(hz, level_db, *, max_peaks: int = 12, within_db: float = 40.0, tol: float = 0.02,
+                         min_harmonics: int = 5, min_share: float = 0.7, f0_range_hz=(50.0, 1000.0)) -> float | None:
+    """The fundamental [Hz] when the loud peaks form one harmonic series (a voice, a note), else None.
+
+    A tapped body rings at frequencies set by its shape (a free-free beam's bending modes
+    go as 1 : 2.76 : 5.40), never on a harmonic series; a voice or a musical note puts
+    its energy at whole multiples of one pitch. So: of the ``max_peaks`` loudest peaks
+    within ``within_db`` of the loudest, at least ``min_share`` lie within ``tol`` × f0
+    of multiples of one fundamental f0 in ``f0_range_hz``, covering at least
+    ``min_harmonics`` different multiples. Candidates for f0: the spacings of the loud
+    peaks and the loudest peaks over 1–4.
+    """
+    f = np.asarray(hz, dtype=np.float64)
+    lev = np.asarray(level_db, dtype=np.float64)
+    if f.size < min_harmonics:
+        return None
+    order = np.argsort(lev)[::-1]
+    order = order[lev[order] >= lev[order[0]] - within_db][:max_peaks]
+    loud = f[order]
+    if loud.size < min_harmonics:
+        return None
+    cands = np.concatenate([np.abs(loud[:, None] - loud[None, :]).ravel(),
+                            (loud[:3, None] / np.arange(1, 5)[None, :]).ravel()])
+    cands = np.unique(np.round(cands[(cands >= f0_range_hz[0]) & (cands <= f0_range_hz[1])], 1))
+    for f0 in cands[::-1]:  # the highest that fits: every series also fits its sub-multiples
+        n = np.round(loud / f0)
+        on = (n >= 1) & (np.abs(loud - n * f0) <= tol * f0)
+        if on.mean() >= min_share and np.unique(n[on]).size >= min_harmonics:
+            return float(np.sum(loud[on] * n[on]) / np.sum(n[on] ** 2))  # least-squares pitch
+    return None
+
+
 def half_power_width(freq_hz, mag, i: int, max_hz: float = 2000.0) -> float:
     """Half-power (−3 dB) half-width of the peak at bin ``i`` [Hz], from the magnitude.
 

@@ -8,6 +8,8 @@ without the fade, give the complex spectra the peak refinement fits (``peaks.py`
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy import fft as sfft
 
@@ -59,6 +61,34 @@ def fade_out(seg, fraction: float) -> np.ndarray:
     if m > 1:
         seg[..., -m:] *= 0.5 * (1 + np.cos(np.pi * np.arange(m) / (m - 1)))
     return seg
+
+
+@functools.lru_cache(maxsize=8)
+def window_leakage_db(n: int, fade_fraction: float, n_fft: int, max_bins: int) -> tuple[np.ndarray, int]:
+    """How far a steady sinusoid leaks through the segment window, bin by bin.
+
+    The tap segments are rectangular windows of ``n`` samples with a raised-cosine fade
+    over their last ``fade_fraction``, zero-padded to ``n_fft``: a mode still ringing at
+    the segment's end (a long ring-down) is cut off there and its peak grows side lobes,
+    spaced about one native bin (fs/n) apart. A decaying mode leaks less: the undamped
+    one is the worst case.
+
+    Returns
+    -------
+    envelope_db : ndarray, shape (max_bins + 1,)
+        Highest side lobe at or beyond each offset from the peak, in bins of ``n_fft``
+        [dB re the peak] (non-increasing).
+    first_null : int
+        Offset of the main lobe's first minimum [bins]: within it, a separate maximum is
+        another mode, never leakage.
+    """
+    w = fade_out(np.ones(int(n)), fade_fraction)
+    mag = np.abs(sfft.rfft(w, n=int(n_fft), workers=1))[:int(max_bins) + 1]
+    mag = mag / mag[0]
+    dips = np.flatnonzero((mag[1:-1] <= mag[:-2]) & (mag[1:-1] <= mag[2:])) + 1
+    first_null = int(dips[0]) if dips.size else mag.size
+    env = np.maximum.accumulate(mag[::-1])[::-1]
+    return 20 * np.log10(env + 1e-300), first_null
 
 
 def spectra(segments, sample_rate: float, n_fft: int) -> tuple[np.ndarray, np.ndarray]:

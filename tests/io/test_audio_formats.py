@@ -128,6 +128,14 @@ def test_a_phone_file_with_a_wav_name_is_still_read(taps, tmp_path):
     assert read_audio(renamed).codec == "aac"
 
 
+def test_a_short_opus_file_libsndfile_calls_malformed_is_read(tmp_path):
+    # libsndfile refuses some valid Ogg Opus files of about half a second as "malformed"
+    # (a real one-tap recording's Opus copy); FFmpeg reads them.
+    x = np.random.default_rng(0).normal(0, 0.1, int(0.53 * FS))
+    rec = read_audio(encode(tmp_path / "tap.opus", x, "libopus", 96_000))
+    assert rec.codec == "opus" and rec.lossy and rec.duration_s == pytest.approx(0.53, abs=0.03)
+
+
 def test_without_pyav_the_message_says_what_to_install(taps, monkeypatch):
     import sys
 
