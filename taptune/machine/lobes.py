@@ -130,6 +130,20 @@ class Lobes:
     modes: tuple = field(default=(), repr=False)
     notes: tuple = ()
 
+    def on(self, part: slice) -> "Lobes":
+        """The lobes on ``rpm[part]`` (an ascending grid's slice): pockets found again; the
+        critical depth kept for the zero-order lobes (the minimum over their whole scan),
+        the lowest limit on the slice otherwise."""
+        from dataclasses import replace
+
+        rpm, a = self.rpm[part], self.a_lim[part]
+        if rpm.size == self.rpm.size:
+            return self
+        fin = a[np.isfinite(a)]
+        crit = self.a_crit if self.method == "zoa" else (float(fin.min()) if fin.size else float("inf"))
+        return replace(self, rpm=rpm, a_lim=a, chatter_hz=self.chatter_hz[part], a_crit=crit,
+                       pockets=_pockets(rpm, a), flip=None if self.flip is None else self.flip[part])
+
     @property
     def instability(self) -> list[str]:
         """Per speed "flip" (period doubling: the critical Floquet multiplier is real and
@@ -451,20 +465,41 @@ def _pockets(grid, a) -> tuple:
 METHODS = ("auto", "zoa", "sdm")
 
 
+#: Modes whose peak compliance 1/(2ζk) is below this fraction of the strongest one's (in
+#: either direction) are left out of the semi-discretization: they barely move the lobes
+#: and a fast weak mode would set the step.
+WEAK_MODE = 0.1
+
+
 def fit_modes(freq_hz, phi_xx, phi_yy, what: str = "tool-point FRF"):
-    """(ModalSet x, ModalSet y or None for a rigid y, notes) fitted to the tool-point FRFs."""
+    """(ModalSet x, ModalSet y or None for a rigid y, notes) fitted to the tool-point FRFs,
+    without the weak modes (``WEAK_MODE``); the notes say how well the fits reproduce the
+    FRFs and what was left out."""
     from taptune.machine.simulate import modal_fit
 
-    notes = []
     fx = modal_fit(freq_hz, phi_xx, what=f"{what} (x)")
-    notes.append(f"x: {fx.modes.n_modes} mode(s) reproduce the FRF to {100 * fx.rel_error:.1f} %")
+    fits = {"x": fx}
     if phi_yy is None or phi_yy is phi_xx or np.array_equal(phi_yy, phi_xx):
-        return fx.modes, fx.modes, notes[:1] + ["y: the x modes"]
-    if np.max(np.abs(phi_yy)) < 1e-6 * np.max(np.abs(phi_xx)):
-        return fx.modes, None, notes + ["y: rigid"]
-    fy = modal_fit(freq_hz, phi_yy, what=f"{what} (y)")
-    notes.append(f"y: {fy.modes.n_modes} mode(s) reproduce the FRF to {100 * fy.rel_error:.1f} %")
-    return fx.modes, fy.modes, notes
+        fits["y"] = fx
+    elif np.max(np.abs(phi_yy)) < 1e-6 * np.max(np.abs(phi_xx)):
+        fits["y"] = None
+    else:
+        fits["y"] = modal_fit(freq_hz, phi_yy, what=f"{what} (y)")
+    peak = max(np.max(1 / (2 * np.array(ft.modes.damping_ratio) * np.array(ft.modes.stiffness_n_m)))
+               for ft in fits.values() if ft is not None)
+    notes, sets = [], {}
+    for d, ft in fits.items():
+        if ft is None:
+            notes.append(f"{d}: rigid")
+            sets[d] = None
+            continue
+        m = ft.modes
+        strong = 1 / (2 * np.array(m.damping_ratio) * np.array(m.stiffness_n_m)) >= WEAK_MODE * peak
+        sets[d] = type(m)(np.array(m.freq_hz)[strong], np.array(m.damping_ratio)[strong],
+                          np.array(m.stiffness_n_m)[strong])
+        weak = "" if strong.all() else f", {int((~strong).sum())} weak one(s) left out"
+        notes.append(f"{d}: {m.n_modes} mode(s) reproduce the FRF to {100 * ft.rel_error:.1f} %{weak}")
+    return sets["x"], sets["y"], notes
 
 
 def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,

@@ -61,7 +61,7 @@ STEPS_PER_MODE = 24
 MIN_NODES = 8
 NODES_PER_PERIOD = 4.0
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
-MAX_NODES = 48
+MAX_NODES = 32
 #: Relative tolerance of the limiting depth.
 DEPTH_RTOL = 5e-3
 #: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
@@ -469,10 +469,11 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
         ch = np.full(grid.size, chat_s[0])
     else:
         inv_s, inv_g = 1.0 / samples, 1.0 / grid
-        big = np.where(np.isfinite(a_s), a_s, np.nan)
+        big = np.where(np.isfinite(a_s) & ok, a_s, np.nan)
         cap = np.nanmax(big) * 1e3 if np.isfinite(big).any() else 1.0
         filled = np.where(np.isfinite(a_s), a_s, cap)
-        a = np.interp(inv_g, inv_s[::-1], filled[::-1])
+        use = ok if ok.any() else np.ones(ok.size, bool)  # speeds left to the ZOA take no part
+        a = np.interp(inv_g, inv_s[use][::-1], filled[use][::-1])
         near = np.clip(np.searchsorted(samples, grid), 0, samples.size - 1)
         left = np.clip(near - 1, 0, samples.size - 1)
         near = np.where(np.abs(samples[left] - grid) < np.abs(samples[near] - grid), left, near)
@@ -486,7 +487,7 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
             in_dense = dense[near]
             for i in np.flatnonzero(in_dense):
                 a[i] = np.min(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)])
-        a = np.where(ok[near], a, np.nan)  # left to the zero-order lobes
+        a = np.where(ok[near] & (grid >= samples[ok].min() if ok.any() else False), a, np.nan)  # left to the ZOA
     out_a, out_f, out_c = np.empty(grid.size), np.empty(grid.size, bool), np.empty(grid.size)
     out_a[order], out_f[order], out_c[order] = a, fl, ch
     return SdmLobes(rpm=speeds, a_lim=out_a, flip=out_f, chatter_hz=out_c, sample_rpm=samples, sample_a=a_s,

@@ -346,6 +346,10 @@ def _growth(states) -> tuple[np.ndarray, np.ndarray]:
 #: A peak must stand this many times above the dip separating it from any higher one
 #: (noise ripples on a measured peak do not; two real modes do).
 MIN_PROMINENCE = 1.25
+#: The modal fit's band and weighting floor, relative to the FRF's peak (modal_fit).
+FIT_LEVEL = 0.2
+#: Starting damping ratio of a peak whose local fit fails.
+DEFAULT_DAMPING = 0.03
 
 
 def _prominence(mag, i: int) -> float:
@@ -372,7 +376,8 @@ class ModalFit:
     """Modes fitted to one tool-point FRF and how well they reproduce it.
 
     ``rel_error`` is ‖G_fit − G‖ / ‖G‖ over the fitted band: the frequencies where |G| is at
-    least ``rel_level`` × its peak, widened by three half-power bandwidths around each mode.
+    least ``FIT_LEVEL`` × its peak (where the chatter frequencies lie), widened by three
+    half-power bandwidths around each mode.
     """
 
     modes: ModalSet
@@ -383,15 +388,15 @@ class ModalFit:
         return {"modes": self.modes.to_dict(), "rel_error": self.rel_error, "band_hz": list(self.band_hz)}
 
 
-def modal_fit(freq_hz, frf, *, max_modes: int = 4, rel_level: float = 0.05, tolerance: float = 0.15,
+def modal_fit(freq_hz, frf, *, max_modes: int = 6, rel_level: float = 0.05, tolerance: float = 0.15,
               what: str = "FRF") -> ModalFit:
     """Fit uncoupled viscous modes to a direct tool-point receptance.
 
-    The peaks of |G| (:func:`taptune.machine.peaks.dominant_modes`, at least ``rel_level``
-    of the highest, at most ``max_modes``) give starting frequencies and damping ratios;
-    the modal stiffnesses follow by linear least squares, then all three per mode are
-    refined by nonlinear least squares (relative misfit) over the band that matters for
-    chatter (:class:`ModalFit`).
+    The prominent peaks of |G| (at least ``rel_level`` of the highest, at most
+    ``max_modes``; each one's frequency and damping from
+    :func:`taptune.machine.peaks.dominant_modes` on its own stretch) start the fit; the
+    modal stiffnesses follow by linear least squares, then all three per mode are refined
+    by nonlinear least squares over the band that matters for chatter (:class:`ModalFit`).
 
     Raises
     ------
@@ -411,26 +416,30 @@ def modal_fit(freq_hz, frf, *, max_modes: int = 4, rel_level: float = 0.05, tole
     tops = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1
     tops = [i for i in tops[np.argsort(-mag[tops])]
             if mag[i] >= rel_level * mag.max() and _prominence(mag, i) >= MIN_PROMINENCE][:max_modes]
-    peaks = []
+    start = []
     for i in tops:  # each peak's frequency and damping from a local fit on its own stretch
         near = np.abs(f - f[i]) <= 0.15 * f[i]
-        found = dominant_modes(f[near], g[near], "", rel_level=0.5, max_modes=1)
-        peaks += [p for p in found if np.isfinite(p.damping_ratio) and 0 < p.damping_ratio < 0.5]
-    if not peaks:
+        found = [p for p in dominant_modes(f[near], g[near], "", rel_level=0.5, max_modes=1)
+                 if np.isfinite(p.damping_ratio) and 0 < p.damping_ratio < 0.5]
+        start.append((found[0].hz, found[0].damping_ratio) if found else (f[i], DEFAULT_DAMPING))
+    if not start:
         raise InputError(f"{what}: no resonance peak to fit modes to (the lobes need at least one mode)")
-    peaks.sort(key=lambda p: p.hz)
-    band = mag >= rel_level * mag.max()
-    for p in peaks:
-        band |= np.abs(f - p.hz) <= 3 * 2 * p.damping_ratio * p.hz
+    start.sort()
+    # The band that decides the lobes: where |G| is large (the chatter frequencies lie
+    # there), and each mode's own neighbourhood; misfit weighted relative to |G| but no
+    # less than FIT_LEVEL of the peak, so that a low flank does not count as much as a peak.
+    band = mag >= FIT_LEVEL * mag.max()
+    for hz, zeta in start:
+        band |= np.abs(f - hz) <= 3 * 2 * zeta * hz
     fb, gb = f[band], g[band]
-    wb = 1.0 / np.maximum(np.abs(gb), 1e-3 * mag.max())  # relative misfit, floored at antiresonances
+    wb = 1.0 / np.maximum(np.abs(gb), FIT_LEVEL * mag.max())
 
     def basis(fn, zeta):
         w, wn = 2 * np.pi * fb[:, None], 2 * np.pi * fn[None, :]
         return wn**2 / (wn**2 - w**2 + 2j * zeta[None, :] * wn * w)
 
-    fn0 = np.array([p.hz for p in peaks])
-    z0 = np.array([p.damping_ratio for p in peaks])
+    fn0 = np.array([hz for hz, _ in start])
+    z0 = np.array([zeta for _, zeta in start])
     b = basis(fn0, z0) * wb[:, None]
     lhs = np.concatenate([b.real, b.imag])
     rhs = np.concatenate([(gb * wb).real, (gb * wb).imag])
