@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
+from taptune.machine.engagement import MILLING, engagement_angles  # noqa: F401 (engagement_angles is public here)
 from taptune.machine.peaks import dominant_modes
 
 MM = 1e-3
@@ -50,32 +51,10 @@ MM = 1e-3
 MIN_FREQUENCIES = 4
 #: Half-power bandwidths on each side of a dominant peak where the scan is refined.
 REFINE_BANDS = 6.0
-MILLING = ("up", "down")
 #: First pass of the envelope: segments with a limit below this many critical depths.
 LOW_SEGMENTS = 4.0
 #: Lobes × segments handled at once by the envelope (bounds its temporary arrays).
 BLOCK_ELEMENTS = 500_000
-
-
-def engagement_angles(ae: float, diameter: float, milling: str) -> tuple[float, float]:
-    """Entry and exit angles φ_st, φ_ex [rad], measured from the y axis, feed along x.
-
-    ``ae`` ≥ ``diameter`` (to 1e-9 relative) is slotting, 0 → π; up-milling
-    0 → arccos(1 − 2a_e/D); down-milling arccos(2a_e/D − 1) → π.
-    """
-    if milling not in MILLING:
-        raise InputError(f"milling must be 'up' or 'down', got {milling!r}")
-    if not (diameter > 0 and np.isfinite(diameter)):
-        raise InputError(f"the tool diameter must be > 0 mm, got {diameter / MM:g}")
-    if not (ae > 0 and np.isfinite(ae)):
-        raise InputError(f"the radial depth ae must be > 0 mm, got {ae / MM:g}")
-    if ae > diameter * (1 + 1e-9):
-        raise InputError(f"the radial depth ae ({ae / MM:g} mm) exceeds the tool diameter ({diameter / MM:g} mm)")
-    if ae >= diameter * (1 - 1e-9):
-        return 0.0, np.pi
-    if milling == "up":
-        return 0.0, float(np.arccos(1 - 2 * ae / diameter))
-    return float(np.arccos(2 * ae / diameter - 1)), np.pi
 
 
 def directional_factors(ae: float, diameter: float, milling: str, kr: float) -> tuple[float, float, float, float]:

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.machine.lobes import engagement_angles
+from taptune.machine.engagement import engagement_angles
 
 #: Steps per period of the fastest mode in the active part of a tooth period.
 STEPS_PER_MODE = 24

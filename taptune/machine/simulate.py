@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.machine.lobes import engagement_angles
+from taptune.machine.engagement import engagement_angles
 
 #: Fewest integration steps per tooth period, per period of the fastest mode, per cut arc.
 STEPS_PER_TOOTH = 100
