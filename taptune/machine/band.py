@@ -14,8 +14,8 @@ with a(n) the central lobes, so ``SAMPLES`` samples cost one interpolation each,
 the method (ZOA or SDM). The factors s are taken at evenly spaced quantiles of a normal
 distribution whose central ``coverage`` interval is the band's ± (deterministic, smooth).
 
-Per speed the **safe depth** is the (1 − P) quantile of the samples: stable with
-probability ≥ P. A **safe pocket** is a speed window at least ±``WINDOW_REL`` of its
+Per speed the **safe depth** is the (1 − P) quantile of the samples (stable with
+probability ≥ P), and never more than the central limit. A **safe pocket** is a speed window at least ±``WINDOW_REL`` of its
 centre wide (and at least ±``WINDOW_MIN_RPM``: a machinist cannot hold a pocket's top to a
 few rpm, and the spindle's speed itself wanders) with the depth that every sample keeps
 stable over the *whole* window with probability ≥ P: per sample the lowest limit in the
@@ -163,8 +163,11 @@ def lobe_band(rpm_ext, a_ext, inner: slice, scales, confidence: float, depth_cap
     if lim.shape[0] == 1:
         low = high = lim[0]
     else:
-        low = np.quantile(lim, 1 - confidence, axis=0, method="inverted_cdf")
-        high = np.quantile(lim, confidence, axis=0, method="inverted_cdf")
+        # Never above the central limit: at a cusp of the central lobes the shifted samples
+        # may all lie higher, and "safe" must not read deeper than "central".
+        central = np.minimum(np.asarray(a_ext, dtype=float)[inner], depth_cap)
+        low = np.minimum(np.quantile(lim, 1 - confidence, axis=0, method="inverted_cdf"), central)
+        high = np.maximum(np.quantile(lim, confidence, axis=0, method="inverted_cdf"), low)
     pockets = safe_pockets(rpm, lim, confidence)
     return LobeBand(rpm=rpm, a_safe=low, a_low=low, a_high=high, confidence=confidence, safe_pockets=pockets,
                     sources=sources, samples=lim.shape[0])
