@@ -227,7 +227,20 @@ def safe_pockets(rpm, limits, confidence: float) -> tuple:
         a = float(depth[i])
         out.append(SafePocket(float(r[lo[i]]), float(r[hi[i] - 1]), float(r[i]), a))
         taken[lo[i]: hi[i]] = True
-    return tuple(out)
+    return _merged(out, float(np.min(np.diff(r))))
+
+
+def _merged(pockets: list, step: float) -> tuple:
+    """Windows of the same depth that touch (a plateau, e.g. at the flute length) as one wider pocket."""
+    by_speed = sorted(pockets, key=lambda p: p.rpm_low)
+    out = []
+    for p in by_speed:
+        q = out[-1] if out else None
+        if q is not None and p.rpm_low - q.rpm_high <= 1.5 * step and abs(p.a - q.a) <= 1e-9 * max(p.a, q.a):
+            out[-1] = SafePocket(q.rpm_low, p.rpm_high, 0.5 * (q.rpm_low + p.rpm_high), q.a)
+        else:
+            out.append(p)
+    return tuple(sorted(out, key=lambda p: (-p.a, -(p.rpm_high - p.rpm_low))))
 
 
 NO_BAND = "none (the FRF is taken as exact)"
