@@ -443,16 +443,8 @@ class MachineView(QWidget):
             art["cap"].set_ydata([cap, cap])
         ax_l.set_title("Stability lobes: zero-order preview (semi-discretization follows)", loc="left")
         a_crit = lobes.a_crit / MM
-        art["crit"].set_ydata([a_crit, a_crit])
-        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit:.2g} mm")
         best = lobes.pockets[0] if lobes.pockets else None
-        art["pocket"].set_visible(best is not None)
-        art["pocket_note"].set_visible(best is not None)
-        if best is not None:
-            rpm, a = best[0], best[1] / MM
-            art["pocket"].set_data([rpm], [a])
-            art["pocket_note"].xy = (rpm, a)
-            art["pocket_note"].set_text(f"{rpm:,.0f} rpm\n{a:.2g} mm")
+        self._mark(a_crit, None if best is None else (best[0], best[1] / MM, f"{best[0]:,.0f} rpm\n{best[1] / MM:.2g} mm"))
         top = max(a / MM for _, a in lobes.pockets) if lobes.pockets else 4 * a_crit
         ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit, 1.1 * cap if np.isfinite(cap) else np.inf))
         ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
@@ -465,7 +457,8 @@ class MachineView(QWidget):
             return
         ax_l = art["ax_l"]
         cap = lobes.depth_cap
-        a_mm = np.where(np.isfinite(lobes.a_lim), np.minimum(lobes.a_lim, cap) / MM, np.nan)
+        capped = np.minimum(lobes.a_lim, cap)  # stable up to the flute length: the cap, not a gap
+        a_mm = np.where(np.isfinite(capped), capped / MM, np.nan)
         if art["stable"] is not None:
             art["stable"].remove()
         art["stable"] = ax_l.fill_between(lobes.rpm, 0, a_mm, color=STABLE, lw=0, zorder=0)
@@ -477,20 +470,26 @@ class MachineView(QWidget):
                                             lw=0, zorder=0.5)
             art["safe"].set_data(band.rpm, band.a_safe / MM)
         art["boundary"].set_data(lobes.rpm, a_mm)
-        a_crit = min(lobes.a_crit, cap) / MM
-        art["crit"].set_ydata([a_crit, a_crit])
-        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit:.2g} mm")
         best = band.safe_pockets[0] if band.safe_pockets else None
-        art["pocket"].set_visible(best is not None)
-        art["pocket_note"].set_visible(best is not None)
-        if best is not None:
-            art["pocket"].set_data([best.rpm], [best.a / MM])
-            art["pocket_note"].xy = (best.rpm, best.a / MM)
-            art["pocket_note"].set_text(f"{best.rpm_low:,.0f}–{best.rpm_high:,.0f} rpm\n{best.a / MM:.2g} mm "
-                                        f"({100 * band.confidence:.0f} %)")
+        self._mark(min(lobes.a_crit, cap) / MM, None if best is None else (
+            best.rpm, best.a / MM, f"{best.rpm_low:,.0f}–{best.rpm_high:,.0f} rpm\n{best.a / MM:.2g} mm "
+                                   f"({100 * band.confidence:.0f} %)"))
         kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
         ax_l.set_title(f"Stability lobes ({kind}): stable below the line", loc="left")
         self.canvas.draw_idle()
+
+    def _mark(self, a_crit_mm: float, best) -> None:
+        """The critical-depth line and the best pocket ``(rpm, a [mm], label)`` (None: no marker)."""
+        art = self._artists
+        art["crit"].set_ydata([a_crit_mm, a_crit_mm])
+        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit_mm:.2g} mm")
+        art["pocket"].set_visible(best is not None)
+        art["pocket_note"].set_visible(best is not None)
+        if best is not None:
+            rpm, a, text = best
+            art["pocket"].set_data([rpm], [a])
+            art["pocket_note"].xy = (rpm, a)
+            art["pocket_note"].set_text(text)
 
     def _make_axes(self) -> None:
         fig = self.canvas.figure
