@@ -51,6 +51,8 @@ from taptune.machine.engagement import engagement_angles
 STEPS_PER_TOOTH = 100
 STEPS_PER_PERIOD = 40
 STEPS_PER_CUT = 40
+#: MillingRun.flip: the median cosine between successive once-per-period differences below this.
+FLIP_COSINE = -0.99
 
 
 @dataclass(frozen=True)
@@ -336,9 +338,10 @@ def _growth(states) -> tuple[np.ndarray, np.ndarray]:
     half = diff.shape[0] // 2
     tail = np.log(np.maximum(norm[half:], 1e-300))
     slope = np.polyfit(np.arange(tail.shape[0]), tail, 1)[0]
-    # Flip: successive differences point opposite ways (cosine of the angle near −1).
+    # Flip: successive differences point opposite ways (cosine of the angle near −1; a Hopf
+    # multiplier at angle θ gives about cos θ, so only θ within ~8° of π passes).
     dots = np.sum(diff[half + 1:] * diff[half:-1], axis=2) / np.maximum(norm[half + 1:] * norm[half:-1], 1e-300)
-    return np.exp(slope), np.median(dots, axis=0) < -0.5
+    return np.exp(slope), np.median(dots, axis=0) < FLIP_COSINE
 
 
 # --------------------------------------------------------------------------- modal fit
