@@ -1,4 +1,10 @@
-"""Milling stability lobes, zero-order approximation (MODEL.md §11; Altintas & Budak 1995).
+"""Milling stability lobes: the zero-order approximation here, and the entry point for all methods.
+
+:func:`stability_lobes` (``method="zoa"|"sdm"|"auto"``) returns :class:`Lobes` from either the
+zero-order lobes below or the semi-discretization of :mod:`taptune.machine.sdm` on modes
+fitted to the FRFs (:func:`fit_modes`), with a depth cap (the flute length).
+
+Zero-order approximation (Altintas & Budak 1995).
 
 For each chatter-frequency candidate ω_c the characteristic equation
 a0 Λ² + a1 Λ + 1 = 0 with
@@ -31,8 +37,10 @@ less than 0.2 %.
 Signatures::
 
     directional_factors(ae, diameter, milling, kr) -> (axx, axy, ayx, ayy)
+    zoa_lobes(freq_hz, phi_xx, phi_yy, *, teeth, ktc, krc, diameter, ae, milling, rpm, refine=8) -> Lobes
     stability_lobes(freq_hz, phi_xx, phi_yy, *, teeth, ktc, krc, diameter, ae, milling, rpm,
-                    refine=8) -> Lobes
+                    refine=8, method="zoa", depth_cap=inf, modes=None) -> Lobes
+    fit_modes(freq_hz, phi_xx, phi_yy) -> (ModalSet x, ModalSet y or None, notes)
 """
 
 from __future__ import annotations
