@@ -18,10 +18,17 @@ Public API (signatures in each module's docstring; SI inside: m, Hz, N/m², m/N)
                        smooth="auto", source="dummy", return_fit=False)
         -> (SpindleReceptance, warnings[, DummyFit])                   # dummy.py
     stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth, ktc, krc, diameter, ae,
-                    milling="up"|"down", rpm, refine=8) -> Lobes       # lobes.py
+                    milling="up"|"down", rpm, refine=8, method="zoa"|"sdm"|"auto",
+                    depth_cap=inf, modes=None) -> Lobes                # lobes.py
+    sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap=inf)  # sdm.py
+    lobes_with_band(freq_hz, phi_xx, phi_yy, *, ..., method, confidence, band, depth_cap)
+        -> (Lobes, LobeBand)                                           # band.py
     MATERIALS: dict[str, CuttingCoefficients]; cutting_coefficients(name)   # materials.py
     dominant_modes(freq_hz, frf, direction) -> list[FRFMode]          # peaks.py
     fit_frfs(freq_hz, frfs) -> RationalFit                            # vectfit.py
+    ModalSet(freq_hz, damping_ratio, stiffness_n_m); modal_fit(freq_hz, frf) -> ModalFit  # simulate.py
+    simulate_milling(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
+                     duration_s, fs, feed_per_tooth, kte=0, kre=0, rng=None) -> MillingRun
 """
 
 from __future__ import annotations
@@ -54,6 +61,14 @@ _EXPORTS = {
     "cutting_coefficients": "materials",
     "fit_frfs": "vectfit",
     "RationalFit": "vectfit",
+    "sdm_lobes": "sdm",
+    "lobes_with_band": "band",
+    "LobeBand": "band",
+    "ModalSet": "simulate",
+    "ModalFit": "simulate",
+    "modal_fit": "simulate",
+    "MillingRun": "simulate",
+    "simulate_milling": "simulate",
 }
 
 __all__ = sorted(_EXPORTS)

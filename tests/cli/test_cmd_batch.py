@@ -218,7 +218,10 @@ def test_batch_on_the_machine_matches_taptune_lobes_and_draws_the_frf_and_lobes(
                  *CUT, "--json", str(lobes_json)])
     capsys.readouterr()
     assert code == 0
-    assert json.loads(lobes_json.read_text())["a_crit_mm"] == pytest.approx(float(rows["one.wav"]["a_crit_mm"]), rel=1e-3)
+    # The semi-discretization samples the speeds it computes over the range it is given, and the
+    # batch's range is widened for the holder's band: the two agree to the sampling (a few per mille
+    # to 2 %), not to rounding as the zero-order lobes did.
+    assert json.loads(lobes_json.read_text())["a_crit_mm"] == pytest.approx(float(rows["one.wav"]["a_crit_mm"]), rel=0.03)
 
 
 def test_without_machine_the_machine_columns_are_empty(folder, tmp_path, capsys):
