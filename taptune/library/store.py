@@ -246,6 +246,22 @@ class HolderLibrary:
             holders[entry.name] = stored
         return stored
 
+    def update(self, name: str, fn) -> HolderEntry:
+        """Replace the holder called ``name`` by ``fn(entry)`` in one locked read-modify-write; returns it.
+
+        ``fn`` gets the entry as it is on disk now (another process's change made in
+        between is kept) and returns the new entry of the same name. UnknownHolderError if
+        absent; nothing is written when ``fn`` raises.
+        """
+        with self.edit() as holders:
+            if name not in holders:
+                raise self._unknown(name, holders)
+            new = checked_entry(fn(holders[name]), f"{self.path}: holder {name!r}")
+            if new.name != name:
+                raise LibraryError(f"{self.path}: updating holder {name!r} must keep its name, got {new.name!r}")
+            holders[name] = new
+        return new
+
     def remove(self, name: str) -> HolderEntry:
         """Delete the holder called ``name``; returns it. UnknownHolderError if absent."""
         with self.edit() as holders:

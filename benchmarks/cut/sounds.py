@@ -1,0 +1,163 @@
+"""Sounds of milling cuts for the tests and the benchmarks of ``taptune cut``.
+
+A cut's vibration (tool-point displacement x, y [m] and cutting forces [N] on a time
+grid: from the milling simulation with the regenerative delay, or a parametric one made
+of lines) is turned into what a phone at the machine door hears:
+
+- the vibration's acceleration (a radiating tool and spindle) and the cutting force
+  (the workpiece and table radiate it), each with a random gain;
+- spindle-rotation harmonics (run-out, unbalance), machine fans and spindle-bearing tones
+  that also sound at idle, a mains hum;
+- broadband coolant and chip noise during the cut, a quieter floor at idle;
+- idle (spindle running, in air) before and after the cut, with the tool's entry and exit;
+- optionally a phone codec (AAC through PyAV) at the end.
+
+Everything is seeded; :class:`CutTruth` keeps what was put in (the chatter frequency,
+its level above the forced vibration, the speed really turned).
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+
+from taptune.io.audio import Recording
+
+FS = 44100
+
+
+@dataclass(frozen=True)
+class CutTruth:
+    """What a synthetic cut really is."""
+
+    rpm: float  # the speed really turned
+    commanded_rpm: float
+    teeth: int
+    chatter_hz: float | None  # the chatter frequency in the vibration (None: stable)
+    chatter_db: float | None  # its level above the strongest forced (tooth-passing) line of the vibration [dB]
+    kind: str  # "stable", "chatter", "growing", ...
+
+
+def lines_vibration(t, rpm: float, teeth: int, *, chatter_hz: float | None = None, chatter_db: float = 20.0,
+                    growth_s: float | None = None, harmonics: int = 8, family_db: float = -15.0, rng=None):
+    """A parametric cut's vibration [arbitrary units] on ``t`` [s from the cut's start].
+
+    Tooth-passing harmonics h·f_tp falling ~6 dB per harmonic with random phases; a chatter
+    line at ``chatter_hz`` ``chatter_db`` above the first harmonic, with its family
+    f_c ± f_tp, f_c ± 2 f_tp at ``family_db`` and below; ``growth_s`` lets the chatter grow
+    from nothing (time constant [s]) and saturate.
+    """
+    rng = np.random.default_rng(rng)
+    f_tp = rpm * teeth / 60.0
+    x = np.zeros_like(t)
+    for h in range(1, harmonics + 1):
+        x += 10 ** (-6 * (h - 1) / 20) * 10 ** (rng.normal(0, 3) / 20) * np.cos(2 * np.pi * h * f_tp * t + rng.uniform(0, 2 * np.pi))
+    if chatter_hz is not None:
+        env = np.ones_like(t)
+        if growth_s is not None:
+            # A logistic growth: small at the start of the cut, saturated by its middle.
+            t_mid = 0.4 * t[-1]
+            env = 1.0 / (1.0 + np.exp(-(t - t_mid) / growth_s))
+        a = 10 ** (chatter_db / 20)
+        x += a * env * np.cos(2 * np.pi * chatter_hz * t + rng.uniform(0, 2 * np.pi))
+        for k, lv in ((1, family_db), (-1, family_db - 3), (2, family_db - 8), (-2, family_db - 10)):
+            fk = chatter_hz + k * f_tp
+            if fk > 20:
+                x += a * env * 10 ** (lv / 20) * np.cos(2 * np.pi * fk * t + rng.uniform(0, 2 * np.pi))
+    return x
+
+
+def _coloured_noise(n: int, rng, fs: float, corner_hz: float = 2000.0) -> np.ndarray:
+    """Broadband noise with a gentle roll-off above ``corner_hz`` (coolant, chips)."""
+    white = rng.standard_normal(n)
+    spec = np.fft.rfft(white)
+    f = np.fft.rfftfreq(n, 1 / fs)
+    spec /= np.sqrt(1 + (f / corner_hz) ** 2)
+    return np.fft.irfft(spec, n)
+
+
+def shop_sound(cut_signal, rpm: float, teeth: int, *, fs: int = FS, idle_before_s: float = 1.0,
+               idle_after_s: float = 0.8, noise_db: float = -30.0, fans: int = 2, hum_hz: float | None = 50.0,
+               runout_db: float = -20.0, codec: str | None = None, level: float = 0.3, rng=None,
+               ramp_s: float = 0.15) -> np.ndarray:
+    """The phone's recording of a cut whose sound during the cut is ``cut_signal`` (at ``fs``).
+
+    ``noise_db`` is the coolant/chip noise level relative to the cut signal's RMS (over
+    the whole band), ``runout_db`` the spindle-rotation harmonics relative to it; fans and
+    bearing tones (at fixed frequencies off the spindle harmonics) and the hum sound all
+    the time. Entry and exit are ``ramp_s`` ramps of the cut's amplitude. Returns mono
+    float samples peaking at ``level``.
+    """
+    rng = np.random.default_rng(rng)
+    s = np.asarray(cut_signal, float)
+    s = s / (np.sqrt(np.mean(s**2)) + 1e-30)
+    n_cut, n0, n1 = len(s), int(idle_before_s * fs), int(idle_after_s * fs)
+    n = n0 + n_cut + n1
+    t = np.arange(n) / fs
+    env = np.zeros(n)
+    env[n0:n0 + n_cut] = 1.0
+    r = max(int(ramp_s * fs), 1)
+    env[n0:n0 + r] = np.linspace(0, 1, r)
+    env[n0 + n_cut - r:n0 + n_cut] = np.linspace(1, 0, r)
+    out = np.zeros(n)
+    out[n0:n0 + n_cut] = s
+    out *= env
+    # The cut's noise (coolant, chips) follows the cut; a quieter floor is always there.
+    out += 10 ** (noise_db / 20) * env * _coloured_noise(n, rng, fs, rng.uniform(1500, 5000))
+    out += 10 ** ((noise_db - 15) / 20) * _coloured_noise(n, rng, fs, 3000.0)
+    f_sp = rpm / 60.0
+    for h in range(1, 6):
+        out += 10 ** ((runout_db - 4 * (h - 1)) / 20) * np.sqrt(2) * np.cos(2 * np.pi * h * f_sp * t + rng.uniform(0, 6.3))
+    for _ in range(fans):
+        f_fan = rng.uniform(150, 3000)
+        out += 10 ** (rng.uniform(-30, -20) / 20) * np.sqrt(2) * np.cos(2 * np.pi * f_fan * t + rng.uniform(0, 6.3))
+    if hum_hz:
+        for h, lv in ((1, -26), (2, -34), (3, -30), (5, -40)):
+            out += 10 ** (lv / 20) * np.sqrt(2) * np.cos(2 * np.pi * h * hum_hz * t + rng.uniform(0, 6.3))
+    out *= level / np.max(np.abs(out))
+    if codec:
+        out = codec_roundtrip(out, fs, codec)
+    return out
+
+
+def codec_roundtrip(x, fs: int, codec: str = "aac", bit_rate: int = 96_000) -> np.ndarray:
+    """``x`` encoded with a phone's codec and decoded again (PyAV, in memory)."""
+    import av
+
+    buf = io.BytesIO()
+    with av.open(buf, "w", format="mp4" if codec == "aac" else "ogg") as container:
+        stream = container.add_stream(codec, rate=fs, layout="mono")
+        stream.bit_rate = bit_rate
+        frame = av.AudioFrame.from_ndarray(np.asarray(x, np.float32)[None, :], format="flt", layout="mono")
+        frame.sample_rate = fs
+        for packet in stream.encode(frame):
+            container.mux(packet)
+        for packet in stream.encode(None):
+            container.mux(packet)
+    buf.seek(0)
+    chunks = []
+    with av.open(buf, "r") as container:
+        for frame in container.decode(audio=0):
+            a = frame.to_ndarray()
+            chunks.append(a.reshape(-1) if a.shape[0] == 1 else a.mean(axis=0))
+    y = np.concatenate(chunks).astype(float)
+    return y[: len(x)] if len(y) >= len(x) else np.pad(y, (0, len(x) - len(y)))
+
+
+def as_recording(x, fs: int = FS, lossy: bool = False) -> Recording:
+    return Recording(np.asarray(x, float)[:, None], fs, "", "aac" if lossy else "FLOAT")
+
+
+def lines_cut(rpm: float, teeth: int, *, chatter_hz=None, chatter_db=20.0, growth_s=None, seconds=3.0,
+              override: float = 1.0, codec=None, seed=0, **shop) -> tuple[Recording, CutTruth]:
+    """A parametric cut (lines, see :func:`lines_vibration`) as a recording, and its truth."""
+    rng = np.random.default_rng(seed)
+    actual = rpm * override
+    t = np.arange(int(seconds * FS)) / FS
+    vib = lines_vibration(t, actual, teeth, chatter_hz=chatter_hz, chatter_db=chatter_db, growth_s=growth_s, rng=rng)
+    x = shop_sound(vib, actual, teeth, codec=codec, rng=rng, **shop)
+    kind = "stable" if chatter_hz is None else ("growing" if growth_s else "chatter")
+    return as_recording(x, lossy=bool(codec)), CutTruth(actual, rpm, teeth, chatter_hz,
+                                                        None if chatter_hz is None else chatter_db, kind)
