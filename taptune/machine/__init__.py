@@ -22,6 +22,9 @@ Public API (signatures in each module's docstring; SI inside: m, Hz, N/m², m/N)
     MATERIALS: dict[str, CuttingCoefficients]; cutting_coefficients(name)   # materials.py
     dominant_modes(freq_hz, frf, direction) -> list[FRFMode]          # peaks.py
     fit_frfs(freq_hz, frfs) -> RationalFit                            # vectfit.py
+    ModalSet(freq_hz, damping_ratio, stiffness_n_m); modal_fit(freq_hz, frf) -> ModalFit  # simulate.py
+    simulate_milling(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
+                     duration_s, fs, feed_per_tooth, kte=0, kre=0, rng=None) -> MillingRun
 """
 
 from __future__ import annotations
@@ -54,6 +57,11 @@ _EXPORTS = {
     "cutting_coefficients": "materials",
     "fit_frfs": "vectfit",
     "RationalFit": "vectfit",
+    "ModalSet": "simulate",
+    "ModalFit": "simulate",
+    "modal_fit": "simulate",
+    "MillingRun": "simulate",
+    "simulate_milling": "simulate",
 }
 
 __all__ = sorted(_EXPORTS)
