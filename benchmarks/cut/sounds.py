@@ -161,3 +161,64 @@ def lines_cut(rpm: float, teeth: int, *, chatter_hz=None, chatter_db=20.0, growt
     kind = "stable" if chatter_hz is None else ("growing" if growth_s else "chatter")
     return as_recording(x, lossy=bool(codec)), CutTruth(actual, rpm, teeth, chatter_hz,
                                                         None if chatter_hz is None else chatter_db, kind)
+
+
+def vibration_levels(x, fs: float, rpm: float, teeth: int) -> tuple[float | None, float | None]:
+    """(chatter frequency [Hz], its level above the strongest tooth-passing line [dB]) of a vibration signal.
+
+    The second half of ``x`` (steady), Hann window; the chatter is the strongest line
+    off the spindle harmonics. None, None when ``x`` holds no line off them above the noise.
+    """
+    y = np.asarray(x, float)[len(x) // 2:]
+    y = (y - y.mean()) * np.hanning(len(y))
+    spec = np.abs(np.fft.rfft(y, 4 * len(y))) ** 2
+    f = np.fft.rfftfreq(4 * len(y), 1 / fs)
+    f_sp, f_tp = rpm / 60.0, rpm * teeth / 60.0
+    df = f[1] - f[0]
+    band = (f > 20) & (f < 10000)
+    w = max(6 * fs / len(y), 3 * df)  # main-lobe half-width of the Hann window, padded
+    near_sp = np.abs(f - np.round(f / f_sp) * f_sp) <= w
+    near_tp = np.abs(f - np.round(f / f_tp) * f_tp) <= w
+    forced = spec[band & near_tp & (f > f_tp / 2)].max()
+    off = band & ~near_sp
+    if not off.any():
+        return None, None
+    i = np.flatnonzero(off)[np.argmax(spec[off])]
+    return float(f[i]), float(10 * np.log10(spec[i] / forced))
+
+
+def simulated_cuts(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
+                   rpm: float, depths, seconds: float = 1.6, feed_per_tooth: float = 0.06e-3, steps: int = 48,
+                   seed: int = 0, codec=None, override: float = 1.0, **shop) -> list[tuple[Recording, CutTruth, float]]:
+    """Cuts at ``rpm`` × ``override`` and each of ``depths`` [m] from the milling simulation, as recordings.
+
+    Returns per depth (recording, truth, growth per tooth period of the linear delay
+    equation: < 1 stable). The sound is the tool's acceleration and the cutting force,
+    with random gains, in a shop (:func:`shop_sound`).
+    """
+    from taptune.machine.simulate import simulate_milling
+
+    rng = np.random.default_rng(seed)
+    actual = rpm * override
+    common = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, rpm=actual,
+                  depth=list(depths), fs=FS, feed_per_tooth=feed_per_tooth, steps=steps)
+    run = simulate_milling(modes_x, modes_y, duration_s=seconds, rng=rng, contact_loss=True, **common)
+    linear = simulate_milling(modes_x, modes_y, duration_s=0.4, rng=np.random.default_rng(seed + 1),
+                              contact_loss=False, **common)
+    out = []
+    for i, depth in enumerate(depths):
+        x, y = np.atleast_2d(run.x_m)[i], np.atleast_2d(run.y_m)[i]
+        fx, fy = np.atleast_2d(run.fx_n)[i], np.atleast_2d(run.fy_n)[i]
+        vib = x + 0.7 * y
+        acc = np.gradient(np.gradient(vib)) * FS**2
+        force = fx + 0.5 * fy
+        g = 10 ** (rng.uniform(-6, 6) / 20)
+        sound = acc / (np.std(acc) + 1e-30) + g * force / (np.std(force) + 1e-30)
+        f_c, level = vibration_levels(vib, FS, actual, teeth)
+        growth = float(np.atleast_1d(linear.growth)[i])
+        chatter = growth > 1.0
+        kind = "chatter" if chatter else "stable"
+        rec = shop_sound(sound, actual, teeth, rng=rng, codec=codec, **shop)
+        out.append((as_recording(rec, lossy=bool(codec)),
+                    CutTruth(actual, rpm, teeth, f_c if chatter else None, level if chatter else None, kind), growth))
+    return out

@@ -28,7 +28,7 @@ import numpy as np
 #: The limit must stand this much above the cut's depth to call a speed stable.
 MARGIN = 1.15
 #: A window narrower than this fraction of its speed is a knife edge.
-MIN_WINDOW = 0.03
+MIN_WINDOW = 0.05
 #: A chatter frequency within this fraction (or the mode's half-power bandwidth, if wider) of a tool-point mode is that mode's.
 MODE_TOLERANCE = 0.05
 #: Chatter below this fraction of the lobes' limit is a chatter the lobes called safe; a clean cut above FAR_ABOVE × the limit, one they called chatter.

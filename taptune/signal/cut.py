@@ -83,8 +83,9 @@ class CutAnalysis:
         no candidate).
     chatter_level_db : float or None
         Its level above the strongest tooth-passing harmonic [dB].
-    family_hz : tuple of float
-        The other lines of its family f_c + k f_tp found in the spectrum [Hz].
+    family_hz, family_level_db : tuple of float
+        The other lines of its family f_c + k f_tp found in the spectrum [Hz], strongest
+        first, and their levels relative to the chatter line [dB].
     spindle_rpm : float
         The speed heard [rpm].
     commanded_rpm : float
@@ -110,6 +111,7 @@ class CutAnalysis:
     chatter_hz: float | None
     chatter_level_db: float | None
     family_hz: tuple
+    family_level_db: tuple
     spindle_rpm: float
     commanded_rpm: float
     teeth: int
@@ -132,6 +134,7 @@ class CutAnalysis:
             "chatter_hz": self.chatter_hz,
             "chatter_level_db": self.chatter_level_db,
             "chatter_family_hz": list(self.family_hz),
+            "chatter_family_level_db": list(self.family_level_db),
             "spindle_rpm": self.spindle_rpm,
             "commanded_rpm": self.commanded_rpm,
             "teeth": self.teeth,
@@ -163,8 +166,8 @@ def frame_levels(mono, sample_rate: float, frame_s: float = FRAME_S) -> np.ndarr
 def find_cut(levels, frame_s: float = FRAME_S) -> tuple[tuple[int, int], np.ndarray, bool]:
     """The steady cut as a frame range [i0, i1), a mask of idle frames, and whether the cut stood out.
 
-    Frames above the midpoint between the quiet (10th percentile) and loud (95th) levels
-    are cutting; gaps of up to 0.15 s are closed (a chip, an interrupted tooth). The
+    Frames above the midpoint between the quiet (10th percentile) and loud (95th) levels,
+    or 10 dB above the quiet level if that is lower, are cutting; gaps of up to 0.15 s are closed (a chip, an interrupted tooth). The
     longest run less :data:`TRIM_FRACTION` at each end is the steady cut. Frames below a
     quarter of the way up, at least 0.25 s away from the cut, are idle. Without that
     contrast the whole recording is taken as cut (trimmed the same way) and nothing is idle.
@@ -174,7 +177,9 @@ def find_cut(levels, frame_s: float = FRAME_S) -> tuple[tuple[int, int], np.ndar
     if hi - lo < CUT_CONTRAST_DB:
         trim = int(TRIM_FRACTION / 2 * n)
         return (trim, n - trim), np.zeros(n, bool), False
-    loud = levels > lo + 0.5 * (hi - lo)
+    # At most 10 dB above the quiet level: a chatter that grows late in the cut is much
+    # louder than its stable start, which is still cutting.
+    loud = levels > lo + min(0.5 * (hi - lo), 10.0)
     gap = int(round(0.15 / frame_s))
     # Close short gaps in the loud mask.
     idx = np.flatnonzero(loud)
@@ -243,27 +248,57 @@ def _near_max(f, y, targets, tol_hz):
 # --------------------------------------------------------------------------- the speed heard
 
 
-def _speed_heard(f, excess, level_db, tp0: float, teeth: int, f_top: float, tolerance: float):
-    """(f_tp [Hz], harmonics found, their excess) of the best tooth-passing comb near ``tp0``."""
+def _line_list(f, level_db, excess):
+    """The lines of a spectrum: interpolated frequencies [Hz] (ascending) and their excess [dB]."""
+    line = (excess >= LINE_DB - 4) & (level_db >= np.r_[level_db[1:], -np.inf]) & (level_db > np.r_[-np.inf, level_db[:-1]])
+    i = np.flatnonzero(line)
+    freq = np.array([_peak_value(f, level_db, j)[0] for j in i])
+    return freq, excess[i]
+
+
+def _comb_scores(lines, df: float, cand, h, anchors=()):
+    """Score of each candidate tooth-passing frequency ``cand`` [Hz]: the lines that lie on its
+    harmonics h·f_tp, plus those spaced by it around each anchor line (the chatter's family
+    f_c + k f_tp). A line counts only within 0.4 bin of where the comb puts it: a comb a
+    little off the true one may meet a few lines of the chatter's family (itself a comb
+    of the same spacing, shifted) but not the harmonics' exact positions."""
+    freq, ex = lines
+    if len(freq) == 0:
+        return np.zeros(len(cand))
+    weight = np.clip(ex - 6.0, 0.0, 24.0)
+
+    def at(targets):
+        j = np.clip(np.searchsorted(freq, targets), 1, len(freq) - 1)
+        near = np.where(np.abs(freq[j] - targets) < np.abs(freq[j - 1] - targets), j, j - 1)
+        return np.where(np.abs(freq[near] - targets) <= 0.4 * df, weight[near], 0.0)
+
+    score = at(cand[:, None] * h[None, :]).sum(axis=1)
+    k = np.array([-3, -2, -1, 1, 2, 3])
+    family = np.zeros(len(cand))
+    for c in anchors:
+        family = np.maximum(family, at(c + cand[:, None] * k[None, :]).sum(axis=1))
+    return score + family
+
+
+def _speed_heard(f, excess, level_db, lines, tp0: float, f_top: float, tolerance: float, anchors=()):
+    """(f_tp [Hz], harmonic numbers, their excess [dB]) of the best tooth-passing comb within ``tolerance`` of ``tp0``.
+
+    The comb is scored on the tooth-passing harmonics and on the spacing of the chatter's
+    family around the ``anchors`` (the strongest lines), so that a chatter that drowns
+    the forced lines still gives the speed; refined from the positions of the harmonics
+    (or of the family) that stand out.
+    """
     df = f[1] - f[0]
     h_max = int(max(1, min(MAX_HARMONICS, f_top // (tp0 * (1 + tolerance)))))
     h = np.arange(1, h_max + 1)
     step = df / (2 * h_max)
     cand = np.arange(tp0 * (1 - tolerance), tp0 * (1 + tolerance) + step, step)
-    score_src = np.clip(excess - 6.0, 0.0, 24.0)
-    # Max over ±1 bin, so a comb a little off a line still scores it.
-    from scipy.ndimage import maximum_filter1d
-
-    smax = maximum_filter1d(score_src, 3, mode="nearest")
-    pos = np.clip(np.round((cand[:, None] * h[None, :] - f[0]) / df).astype(int), 0, len(f) - 1)
-    score = smax[pos].sum(axis=1)
     # A small preference for the commanded speed breaks ties between equal combs.
-    score = score - 0.5 * np.abs(cand / tp0 - 1) / tolerance
+    score = _comb_scores(lines, df, cand, h, anchors) - 0.5 * np.abs(cand / tp0 - 1) / tolerance
     tp = float(cand[np.argmax(score)])
-    # Refine from the line positions of the harmonics that stand out.
     idx, ex = _near_max(f, excess, tp * h, 1.5 * df)
     good = ex >= LINE_DB
-    if good.any():
+    if good.sum() >= 2:
         est = np.array([_peak_value(f, level_db, i)[0] for i in idx[good]]) / h[good]
         w = h[good].astype(float)
         refined = float(np.sum(w * w * est) / np.sum(w * w))
@@ -271,6 +306,77 @@ def _speed_heard(f, excess, level_db, tp0: float, teeth: int, f_top: float, tole
             tp = refined
     idx, ex = _near_max(f, excess, tp * h, 1.5 * df)
     return tp, h, ex
+
+
+def _family_lines(f, excess, anchors, tp: float) -> int:
+    """Most lines standing out at c ± k f_tp (k = 1…3) around one of the ``anchors``."""
+    df = f[1] - f[0]
+    best = 0
+    for c in anchors:
+        k = np.array([-3, -2, -1, 1, 2, 3])
+        x = c + k * tp
+        x = x[(x > f[0]) & (x < f[-1])]
+        if len(x):
+            _, e = _near_max(f, excess, x, 1.5 * df)
+            best = max(best, int(np.sum(e >= LINE_DB)))
+    return best
+
+
+def _elsewhere(f, excess, tp0: float, f_top: float, tolerance: float) -> float | None:
+    """A tooth-passing comb [Hz] well outside ``tolerance`` of ``tp0`` (0.2–5 ×), when one stands out.
+
+    The lowest frequency whose first harmonics (up to 6) nearly all stand out; None if none.
+    """
+    df = f[1] - f[0]
+    cand = np.exp(np.arange(np.log(max(0.2 * tp0, 20.0)), np.log(min(5 * tp0, f_top / 3)), df / (8 * tp0)))
+    if len(cand) == 0:
+        return None
+    h = np.arange(1, 7)
+    freqs = cand[:, None] * h[None, :]
+    inside = freqs < f_top
+    idx = np.clip(np.round((freqs - f[0]) / df).astype(int), 0, len(f) - 1)
+    from scipy.ndimage import maximum_filter1d
+
+    e = maximum_filter1d(excess, 3, mode="nearest")[idx]
+    count = np.sum((e >= LINE_DB) & inside, axis=1)
+    need = np.minimum(np.sum(inside, axis=1), 5)
+    ok = (count >= need) & (need >= 3) & (np.abs(cand / tp0 - 1) > tolerance)
+    return float(cand[np.flatnonzero(ok)[0]]) if ok.any() else None
+
+
+def _comb_problem(f, excess, tp: float, teeth: int, ex) -> str | None:
+    """Why the comb found cannot be this cut's tooth passing, or None: only every m-th of
+    its harmonics stands out (the sound's tooth passing is m times higher: more teeth, or
+    a higher speed, than given)."""
+    e = np.clip(ex, 0.0, 30.0)
+    for m in range(2, 7):
+        n = min(len(e), 3 * m)
+        if n < 2 * m:
+            break
+        h = np.arange(1, n + 1)
+        on, off = e[:n][h % m == 0], e[:n][h % m != 0]
+        if on.mean() >= LINE_DB and off.mean() < on.mean() - 10.0:
+            nth = {2: "2nd", 3: "3rd"}.get(m, f"{m}th")
+            return f"only every {nth} harmonic of the tooth-passing frequency sounds (the sound's is {m}× higher)"
+    return None
+
+
+def _idle_like(f, excess, tp: float, teeth: int, ex, f_top: float, margin_db: float) -> bool:
+    """The tooth-passing harmonics stand no more than ``margin_db`` above the other spindle
+    harmonics: a spindle turning without a tooth cutting (idle, air-cutting), or fewer
+    teeth than given."""
+    if teeth <= 1:
+        return False
+    df = f[1] - f[0]
+    f_sp = tp / teeth
+    k = np.arange(1, int(min(4 * teeth, f_top // f_sp)) + 1)
+    k = k[k % teeth != 0]
+    if teeth % 2 == 0:
+        k = k[k % (teeth // 2) != 0]  # odd multiples of f_tp/2: a flip chatter sounds there
+    if not len(k):
+        return False
+    _, other = _near_max(f, excess, k * f_sp, 1.5 * df)
+    return bool(np.clip(ex[: min(len(ex), 4)], 0, 30).mean() < np.clip(other, 0.0, 30.0).mean() + margin_db)
 
 
 # --------------------------------------------------------------------------- analysis
@@ -362,14 +468,43 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     if tp0 * (1 - speed_tolerance) > f_top / 2:
         raise InputError(f"--rpm {rpm:g} with --teeth {teeth}: the tooth-passing frequency {tp0:.0f} Hz lies "
                          f"above what {name} can show ({f_top:.0f} Hz)")
-    tp, h, ex = _speed_heard(f, excess, level, tp0, teeth, f_top, speed_tolerance)
-    first = ex[: min(len(ex), 6)]
+    # The strongest lines anchor the chatter's family (its spacing is the tooth passing too).
+    line = (excess >= LINE_DB) & (level >= np.r_[level[1:], -np.inf]) & (level > np.r_[-np.inf, level[:-1]])
+    strong = np.flatnonzero(line)
+    anchors = f[strong[np.argsort(-level[strong])][:3]] if len(strong) else np.zeros(0)
+    # The harmonics alone first; a chatter that drowns them still gives the speed by its family's spacing.
+    lines = _line_list(f, level, excess)
+    tp, h, ex = _speed_heard(f, excess, level, lines, tp0, f_top, speed_tolerance)
+    if np.sum(ex[:6] >= LINE_DB) < 2:
+        tp, h, ex = _speed_heard(f, excess, level, lines, tp0, f_top, speed_tolerance, anchors)
     found = int(np.sum(ex >= LINE_DB))
-    if np.sum(first >= LINE_DB) < min(2, len(first)):
-        what = "no cut in it (no tooth-passing harmonics)" if not contrast else \
-            "no tooth-passing harmonics"
-        raise InputError(f"{name}: {what} near {tp0:.1f} Hz = {teeth} teeth × {rpm:g} rpm / 60 (±{100 * speed_tolerance:g} %); "
-                         f"check --rpm and --teeth, and that the recording holds the cut")
+    fam = _family_lines(f, excess, anchors, tp)
+    where = (f"near {tp0:.1f} Hz = {teeth} teeth × {rpm:g} rpm / 60 (±{100 * speed_tolerance:g} %); "
+             "check --rpm and --teeth, and that the recording holds the cut")
+    if np.sum(ex[:6] >= LINE_DB) + fam < 2:
+        other = _elsewhere(f, excess, tp0, f_top, speed_tolerance)
+        if other is not None:
+            raise InputError(f"{name}: the sound's tooth passing is at {other:.1f} Hz ({60 * other / teeth:.0f} rpm with "
+                             f"{teeth} teeth), not {where}")
+        if not contrast:
+            raise InputError(f"{name}: no cut in it (no tooth-passing harmonics, no louder cutting part) {where}")
+        # A cut louder than the idle whose forces barely vary (slotting with many teeth): no
+        # line to hear the speed by; take the commanded one.
+        tp = tp0
+        warnings.append(f"{name}: no tooth-passing line heard (a cut with an even force, e.g. slotting with "
+                        f"{teeth} teeth); the speed is taken as commanded")
+        h = np.arange(1, len(h) + 1)
+        _, ex = _near_max(f, excess, tp * h, 1.5 * df)
+    else:
+        problem = _comb_problem(f, excess, tp, teeth, ex)
+        if problem:
+            raise InputError(f"{name}: {problem} {where}")
+        # Without a louder cutting part the tooth-passing lines must stand out clearly from the
+        # spindle's others; with one, they must at least not be weaker (run-out can be strong).
+        if fam < 2 and _idle_like(f, excess, tp, teeth, ex, f_top, 0.0 if contrast else 6.0):
+            what = "fewer teeth than given cut, or " if contrast else ""
+            raise InputError(f"{name}: the tooth-passing harmonics stand no higher than the other spindle harmonics "
+                             f"({what}the spindle turns and no tooth cuts) {where}")
     f_sp = tp / teeth
     tol = max(1.5 * df, 2e-3 * f_sp)
 
@@ -403,7 +538,7 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     cand = ~forced_line & ~excluded
 
     chatter_hz = level_db = None
-    family = ()
+    family, family_db = (), ()
     verdict = "stable"
     if cand.any():
         j = np.flatnonzero(cand)[np.argmax(pl[cand])]
@@ -412,7 +547,9 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
         prominence = float(excess[peaks[j]])
         k = np.round((pf - chatter_hz) / tp)
         fam = cand & (k != 0) & (np.abs(pf - chatter_hz - k * tp) <= tol) & (pl >= pl[j] - 30)
-        family = tuple(float(x) for x in sorted(pf[fam]))
+        order = np.flatnonzero(fam)[np.argsort(-pl[fam])]
+        family = tuple(float(pf[i]) for i in order)
+        family_db = tuple(float(pl[i] - pl[j]) for i in order)
         if level_db >= CHATTER_DB and prominence >= CHATTER_PROMINENCE_DB:
             verdict = "chatter"
         elif level_db >= STABLE_DB or (len(family) >= 2 and level_db >= STABLE_DB - 10):
@@ -427,7 +564,7 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     if recording.lossy:
         warnings.append(f"{name}: lossy {recording.codec} recording; weak lines may be lost by the codec")
     return CutAnalysis(
-        verdict=verdict, chatter_hz=chatter_hz, chatter_level_db=level_db, family_hz=family,
+        verdict=verdict, chatter_hz=chatter_hz, chatter_level_db=level_db, family_hz=family, family_level_db=family_db,
         spindle_rpm=60 * f_sp, commanded_rpm=float(rpm), teeth=int(teeth), tooth_passing_hz=tp,
         forced_level_db=forced, harmonics_found=found, cut_s=(i0 * FRAME_S, i1 * FRAME_S), idle_s=idle_s,
         freq_hz=f, level_db=level, background_db=bg, idle_db=idle_db, excluded_hz=excluded_hz,
