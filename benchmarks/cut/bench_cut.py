@@ -42,6 +42,23 @@ DEPTH_FACTORS = (0.5, 1.0, 1.6, 2.5)
 MAX_RPM = 24000.0
 
 
+def _cached(folder, key: str, make):
+    """``make()`` (a list of picklable cuts), kept in ``folder`` under ``key`` when a folder is given."""
+    if not folder:
+        return make()
+    import hashlib
+    import pickle
+    from pathlib import Path
+
+    path = Path(folder) / (hashlib.sha1(key.encode()).hexdigest()[:16] + ".pkl")
+    if path.is_file():
+        return pickle.loads(path.read_bytes())
+    out = make()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(pickle.dumps(out))
+    return out
+
+
 def truly_stable(cfg, rpm: float, depth: float) -> bool:
     """Growth of the linear delay equation < 1 at (rpm, depth)."""
     run = simulate_milling(cfg["mx"], cfg["my"], teeth=cfg["teeth"], ktc=KTC, krc=KRC, diameter=cfg["diameter"],
@@ -54,6 +71,7 @@ def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--per-config", type=int, default=4, help="speeds per tool (each with 4 depths)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--cache", metavar="DIR", help="keep the simulated cuts here (re-runs only listen again)")
     args = p.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     rows = []
@@ -72,9 +90,9 @@ def main(argv=None) -> None:
             shop = dict(noise_db=float(rng.uniform(-35, -20)), hum_hz=float(rng.choice([50.0, 60.0])),
                         fans=int(rng.integers(0, 4)))
             override = float(rng.choice([1.0, 1.0, rng.uniform(0.96, 1.05)]))
-            cuts = simulated_cuts(cfg["mx"], cfg["my"], teeth=cfg["teeth"], ktc=KTC, krc=KRC, diameter=cfg["diameter"],
-                                  ae=cfg["ae"], milling=cfg["milling"], rpm=rpm, depths=depths, seed=seed,
-                                  codec=codec, override=override, **shop)
+            cuts = _cached(args.cache, f"{cfg['name']}-{rpm:.3f}-{seed}", lambda: simulated_cuts(
+                cfg["mx"], cfg["my"], teeth=cfg["teeth"], ktc=KTC, krc=KRC, diameter=cfg["diameter"], ae=cfg["ae"],
+                milling=cfg["milling"], rpm=rpm, depths=depths, seed=seed, codec=codec, override=override, **shop))
             for depth, (rec, truth, growth) in zip(depths, cuts):
                 try:
                     a = analyse_cut(rec, rpm, cfg["teeth"])

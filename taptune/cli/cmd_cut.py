@@ -108,9 +108,15 @@ def run(args) -> int:
     for path, what in ((args.json, "JSON"), (args.plot, "plot")):
         output_path(path, what, library=args.library, inputs=inputs)
     with_model = _check(args)
-    model = _model_inputs(args) if with_model else None  # a bad holder or machine: before the analysis
+    if with_model:  # an unknown holder, a bad material: one line before any work
+        from taptune.cli.cut import cutting_coefficients
+        from taptune.library.store import HolderLibrary, default_library_path
+
+        HolderLibrary(default_library_path(args.library)).get(args.holder)
+        cutting_coefficients(args)
     recording = read_audio(args.wav)
     analysis = analyse_cut(recording, args.rpm, args.teeth, start_s=args.start_s, end_s=args.end_s)
+    model = _model_inputs(args) if with_model else None
     warnings = list(recording.warnings) + list(analysis.warnings)
     max_rpm = args.max_rpm
     if max_rpm is None and model is not None:

@@ -308,11 +308,15 @@ def _speed_heard(f, excess, level_db, lines, tp0: float, f_top: float, tolerance
     return tp, h, ex
 
 
-def _family_lines(f, excess, anchors, tp: float) -> int:
-    """Most lines standing out at c ± k f_tp (k = 1…3) around one of the ``anchors``."""
+def _family_lines(f, excess, anchors, tp: float, teeth: int) -> int:
+    """Most lines standing out at c ± k f_tp (k = 1…3) around one of the ``anchors`` that is
+    off the spindle harmonics (a chatter's family; lines on the harmonics are forced)."""
     df = f[1] - f[0]
+    f_sp = tp / teeth
     best = 0
     for c in anchors:
+        if abs(c - round(c / f_sp) * f_sp) <= 1.5 * df:
+            continue
         k = np.array([-3, -2, -1, 1, 2, 3])
         x = c + k * tp
         x = x[(x > f[0]) & (x < f[-1])]
@@ -322,26 +326,34 @@ def _family_lines(f, excess, anchors, tp: float) -> int:
     return best
 
 
-def _elsewhere(f, excess, tp0: float, f_top: float, tolerance: float) -> float | None:
-    """A tooth-passing comb [Hz] well outside ``tolerance`` of ``tp0`` (0.2–5 ×), when one stands out.
-
-    The lowest frequency whose first harmonics (up to 6) nearly all stand out; None if none.
-    """
-    df = f[1] - f[0]
-    cand = np.exp(np.arange(np.log(max(0.2 * tp0, 20.0)), np.log(min(5 * tp0, f_top / 3)), df / (8 * tp0)))
+def _elsewhere(lines, df: float, tp: float, tp0: float, f_top: float, tolerance: float) -> float | None:
+    """A tooth-passing comb [Hz] outside ``tolerance`` of ``tp0`` (0.2–5 ×) whose first harmonics
+    (up to 6) all but one stand out, and that is neither a multiple nor a sub-multiple of
+    ``tp``; the one whose harmonics stand out most. None if none."""
+    freq, ex = lines
+    if len(freq) < 3:
+        return None
+    cand = np.exp(np.arange(np.log(max(0.2 * tp0, 20.0)), np.log(min(5 * tp0, f_top / 3)), df / (12 * tp0)))
+    cand = cand[np.abs(cand / tp0 - 1) > tolerance]
+    ratio = np.maximum(cand / tp, tp / cand)
+    cand = cand[np.abs(ratio - np.round(ratio)) > 0.02]
     if len(cand) == 0:
         return None
     h = np.arange(1, 7)
-    freqs = cand[:, None] * h[None, :]
-    inside = freqs < f_top
-    idx = np.clip(np.round((freqs - f[0]) / df).astype(int), 0, len(f) - 1)
-    from scipy.ndimage import maximum_filter1d
-
-    e = maximum_filter1d(excess, 3, mode="nearest")[idx]
-    count = np.sum((e >= LINE_DB) & inside, axis=1)
-    need = np.minimum(np.sum(inside, axis=1), 5)
-    ok = (count >= need) & (need >= 3) & (np.abs(cand / tp0 - 1) > tolerance)
-    return float(cand[np.flatnonzero(ok)[0]]) if ok.any() else None
+    targets = cand[:, None] * h[None, :]
+    inside = targets < f_top
+    j = np.clip(np.searchsorted(freq, targets), 1, len(freq) - 1)
+    near = np.where(np.abs(freq[j] - targets) < np.abs(freq[j - 1] - targets), j, j - 1)
+    e = np.where((np.abs(freq[near] - targets) <= 0.6 * df + 1e-3 * targets) & inside & (ex[near] >= LINE_DB),
+                 np.clip(ex[near], 0, 30), 0.0)
+    n = inside.sum(axis=1)
+    ok = ((e > 0).sum(axis=1) >= n - 1) & (n >= 4)
+    if not ok.any():
+        return None
+    mean = e.sum(axis=1) / np.maximum(n, 1)
+    i = np.flatnonzero(ok)[np.argmax(mean[ok])]
+    hit = e[i] > 0
+    return float(np.sum(freq[near[i]][hit]) / np.sum(h[hit]))  # the lines' positions, weighted by harmonic
 
 
 def _comb_problem(f, excess, tp: float, teeth: int, ex) -> str | None:
@@ -478,14 +490,16 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     if np.sum(ex[:6] >= LINE_DB) < 2:
         tp, h, ex = _speed_heard(f, excess, level, lines, tp0, f_top, speed_tolerance, anchors)
     found = int(np.sum(ex >= LINE_DB))
-    fam = _family_lines(f, excess, anchors, tp)
+    fam = _family_lines(f, excess, anchors, tp, teeth)
     where = (f"near {tp0:.1f} Hz = {teeth} teeth × {rpm:g} rpm / 60 (±{100 * speed_tolerance:g} %); "
              "check --rpm and --teeth, and that the recording holds the cut")
+    n_in = int(np.sum(tp * h[:6] < f_top))
+    weak = np.sum(ex[:6] >= LINE_DB) < min(4, n_in - 1) and fam < 2
+    other = _elsewhere(lines, df, tp, tp0, f_top, speed_tolerance) if weak else None
+    if other is not None:
+        raise InputError(f"{name}: the sound's tooth passing is at {other:.1f} Hz ({60 * other / teeth:.0f} rpm with "
+                         f"{teeth} teeth), not {where}")
     if np.sum(ex[:6] >= LINE_DB) + fam < 2:
-        other = _elsewhere(f, excess, tp0, f_top, speed_tolerance)
-        if other is not None:
-            raise InputError(f"{name}: the sound's tooth passing is at {other:.1f} Hz ({60 * other / teeth:.0f} rpm with "
-                             f"{teeth} teeth), not {where}")
         if not contrast:
             raise InputError(f"{name}: no cut in it (no tooth-passing harmonics, no louder cutting part) {where}")
         # A cut louder than the idle whose forces barely vary (slotting with many teeth): no
