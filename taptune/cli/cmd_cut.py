@@ -14,8 +14,6 @@ import argparse
 import sys
 
 DEFAULT_MIN_RPM = 500.0
-#: Members of the chatter's family this close [dB] to its strongest line may be the tool's chatter.
-FAMILY_DB = 10.0
 
 
 def add_parser(sub, name, help_text):
@@ -102,7 +100,7 @@ def _model_inputs(args):
 def run(args) -> int:
     from taptune.cli.common import command_inputs, output_path, write_json
     from taptune.io.audio import read_audio
-    from taptune.signal.cut import analyse_cut, smith_tlusty_speeds
+    from taptune.signal.cut import analyse_cut
 
     inputs = command_inputs(args)
     for path, what in ((args.json, "JSON"), (args.plot, "plot")):
@@ -135,12 +133,11 @@ def run(args) -> int:
         lobes_info = _with_lobes(args, analysis, model, min_rpm, max_rpm, warnings)
         out.update(suggested_rpm=lobes_info["suggested_rpm"], suggestion_basis="lobes")
         details["lobes"] = lobes_info["summary"]
-    elif analysis.chatter_hz is not None and analysis.verdict != "stable":
-        out.update(suggested_rpm=[round(n) for n in smith_tlusty_speeds(
-            analysis.chatter_hz, args.teeth, analysis.spindle_rpm, min_rpm=min_rpm, max_rpm=max_rpm)],
-            suggestion_basis="rule")
     else:
-        out["suggestion_basis"] = "rule"
+        from taptune.machine.next_speed import advise
+
+        out.update(suggested_rpm=[round(n) for n in advise(analysis, min_rpm=min_rpm, max_rpm=max_rpm).suggested_rpm],
+                   suggestion_basis="rule")
     out["analysis"] = details
     out["warnings"] = warnings
     if lobes_info is not None and not args.no_save:
@@ -161,7 +158,7 @@ def _with_lobes(args, analysis, model, min_rpm, max_rpm, warnings) -> dict:
 
     from taptune.library.exchange import frequency_grid as uniform_grid
     from taptune.machine import stability_lobes
-    from taptune.machine.next_speed import lobe_advice, match_mode, observation_warnings
+    from taptune.machine.next_speed import advise, observation_warnings
 
     entry, library, machine, frf, cut, diameter, more = model
     warnings += [w for w in more if w not in warnings]
@@ -174,51 +171,26 @@ def _with_lobes(args, analysis, model, min_rpm, max_rpm, warnings) -> dict:
     a_lim = np.asarray(lobes.a_lim)
     a_safe = getattr(lobes, "a_lim_safe", None)
     confidence = getattr(lobes, "confidence", None)
-    boundary = a_lim if a_safe is None else np.asarray(a_safe)
-    advice = lobe_advice(rpm, boundary, args.depth * 1e-3, analysis.spindle_rpm, min_rpm=min_rpm, max_rpm=max_rpm)
-    mode, matches = (None, True)
-    chatter = analysis.chatter_hz
-    if chatter is not None and analysis.verdict != "stable":
-        # The tooth passing aliases the chatter into f_c + k f_tp: a member of the family
-        # within FAMILY_DB of the strongest line that lies on a tool-point mode is the tool's chatter.
-        family = [f for f, db in zip(analysis.family_hz, analysis.family_level_db) if db >= -FAMILY_DB]
-        for f in [chatter] + family:
-            m, ok = match_mode(f, frf.modes)
-            if ok:
-                mode, matches, chatter = m, True, f
-                break
-        else:
-            mode, matches = match_mode(chatter, frf.modes)
-        if not matches:
-            near = f" (nearest tool-point mode {mode.hz:.0f} Hz)" if mode is not None else ""
-            warnings.append(f"the chatter at {chatter:.0f} Hz matches no tool-point mode of {entry.name}{near}: "
-                            "likely the workpiece, the fixture or the spindle; the holder's lobes cannot help with it")
-    if advice.depth_to is not None:
-        warnings.append(f"no speed within {min_rpm:.0f}–{rpm[-1]:.0f} rpm is stable at {args.depth:g} mm by the lobes: "
-                        f"come down to {advice.depth_to * 1e3:.2g} mm at {advice.suggested_rpm[0]:.0f} rpm")
-    this = _observation(args, analysis, cut, None)
-    seen = list(entry.observations) + [this]
+    advice = advise(analysis, min_rpm=min_rpm, max_rpm=max_rpm, depth=args.depth * 1e-3, rpm=rpm,
+                    a_lim=a_lim if a_safe is None else np.asarray(a_safe), modes=frf.modes, holder=entry.name)
+    warnings += list(advice.warnings)
+    seen = list(entry.observations) + [_observation(args, analysis, cut, None)]
     warnings += observation_warnings(seen, rpm, a_lim, a_safe, confidence)
-    summary = advice.to_dict() | {"method": getattr(lobes, "method", "zoa"), "a_crit_mm": lobes.a_crit * 1e3,
-                                  "chatter_matches_tool_mode": matches,
-                                  "tool_mode_hz": None if mode is None else mode.hz,
-                                  "observations": len(seen) - (1 if args.no_save else 0)}
+    summary = advice.lobes.to_dict() | {"method": getattr(lobes, "method", "zoa"), "a_crit_mm": lobes.a_crit * 1e3,
+                                        "chatter_hz_tool": advice.chatter_hz,
+                                        "chatter_matches_tool_mode": advice.matches_tool,
+                                        "tool_mode_hz": advice.tool_mode_hz,
+                                        "observations": len(seen) - (1 if args.no_save else 0)}
     return {"suggested_rpm": [round(n) for n in advice.suggested_rpm], "summary": summary, "lobes": lobes,
             "observations": seen, "cut": cut, "diameter": diameter, "holder": entry.name}
 
 
 def _observation(args, analysis, cut, sha):
-    from taptune import __version__
     from taptune.library.observations import CutObservation
-    from taptune.library.schema import utc_now
 
-    return CutObservation(
-        date=utc_now(), recording=args.wav.replace("\\", "/").rsplit("/", 1)[-1], sha256=sha or "0" * 64,
-        rpm=round(analysis.spindle_rpm, 1), depth_mm=args.depth, ae_mm=cut.ae_mm, milling=cut.milling,
-        teeth=cut.teeth, material=cut.material, ktc_mpa=cut.ktc / 1e6, krc_mpa=cut.krc / 1e6,
-        verdict=analysis.verdict, chatter_hz=None if analysis.chatter_hz is None else round(analysis.chatter_hz, 2),
-        chatter_level_db=None if analysis.chatter_level_db is None else round(analysis.chatter_level_db, 1),
-        taptune_version=__version__)
+    return CutObservation.from_analysis(analysis, depth_mm=args.depth, ae_mm=cut.ae_mm, milling=cut.milling,
+                                        ktc_mpa=cut.ktc / 1e6, krc_mpa=cut.krc / 1e6, material=cut.material,
+                                        recording=args.wav, sha256=sha)
 
 
 def _save(args, analysis, model, recording) -> None:

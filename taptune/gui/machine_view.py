@@ -200,6 +200,10 @@ class MachineView(QWidget):
         layout.addLayout(cut)
         layout.addWidget(self.stickout)
         layout.addWidget(self.summary)
+        from taptune.gui.cut_panel import CutPanel  # listen to a cut (issue 21)
+
+        self.cut_panel = CutPanel(self)
+        layout.addWidget(self.cut_panel)
         layout.addWidget(self.canvas, 1)
         self._material_changed(self.material.currentText())
 
@@ -391,6 +395,7 @@ class MachineView(QWidget):
         top = max(a / MM for _, a in lobes.pockets) if lobes.pockets else 4 * a_crit
         ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit))
         ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
+        self.cut_panel.mark(ax_l)  # the observed cuts, ✓ / ✗
         self.canvas.draw_idle()
 
     def _make_axes(self) -> None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import datetime, timezone
 
 from taptune.errors import InputError
 
@@ -74,6 +74,27 @@ class CutObservation:
 
     def to_dict(self) -> dict:
         return {name: getattr(self, name) for name in self.__dataclass_fields__}
+
+    @classmethod
+    def from_analysis(cls, analysis, *, depth_mm: float, ae_mm: float, milling: str, ktc_mpa: float,
+                      krc_mpa: float, material: str | None = None, recording: str = "", sha256: str | None = None,
+                      date: str | None = None) -> "CutObservation":
+        """The record of a :class:`taptune.signal.cut.CutAnalysis` (the speed heard, the verdict) at this cut.
+
+        ``sha256`` None (a live recording, never a file) is stored as 64 zeros.
+        """
+        from taptune import __version__
+
+        def rounded(v, digits):
+            return None if v is None else round(float(v), digits)
+
+        when = date or datetime.now(timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+        return cls(date=when, recording=recording.replace("\\", "/").rsplit("/", 1)[-1] or "recorded cut",
+                   sha256=sha256 or "0" * 64, rpm=round(analysis.spindle_rpm, 1), depth_mm=float(depth_mm),
+                   ae_mm=float(ae_mm), milling=milling, teeth=int(analysis.teeth), material=material,
+                   ktc_mpa=float(ktc_mpa), krc_mpa=float(krc_mpa), verdict=analysis.verdict,
+                   chatter_hz=rounded(analysis.chatter_hz, 2), chatter_level_db=rounded(analysis.chatter_level_db, 1),
+                   taptune_version=__version__)
 
     @classmethod
     def from_dict(cls, data, source: str = "<library>", key: str = "observation") -> "CutObservation":

@@ -156,3 +156,78 @@ def observation_warnings(observations, rpm, a_lim, a_safe=None, confidence: floa
             out.append(f"a clean cut at {o.rpm:.0f} rpm and {o.depth_mm:g} mm, {depth / lim:.1f}× the predicted "
                        f"limit {lim * 1e3:.3g} mm: the model is off there")
     return out
+
+
+#: Members of the chatter's family this close [dB] to its strongest line may be the tool's chatter.
+FAMILY_DB = 10.0
+
+
+@dataclass(frozen=True)
+class CutAdvice:
+    """What to do after a listened cut: speeds to try and why.
+
+    Attributes
+    ----------
+    suggested_rpm : tuple of float
+        Best first.
+    basis : {"lobes", "rule"}
+        From the holder's lobes at the cut's depth, or by the tooth-passing rule.
+    lobes : LobeAdvice or None
+    chatter_hz : float or None
+        The chatter frequency the advice is for: with the lobes, the member of the
+        chatter's family on a tool-point mode, when one is.
+    tool_mode_hz : float or None
+        The tool-point mode nearest the chatter.
+    matches_tool : bool or None
+        Whether the chatter is that mode's (None without a chatter or without modes).
+    warnings : tuple of str
+    """
+
+    suggested_rpm: tuple
+    basis: str
+    lobes: LobeAdvice | None = None
+    chatter_hz: float | None = None
+    tool_mode_hz: float | None = None
+    matches_tool: bool | None = None
+    warnings: tuple = ()
+
+
+def advise(analysis, *, min_rpm: float, max_rpm: float | None, depth: float | None = None, rpm=None, a_lim=None,
+           modes=(), holder: str = "the holder") -> CutAdvice:
+    """The next speeds after the cut ``analysis`` (a :class:`taptune.signal.cut.CutAnalysis`).
+
+    Without lobes (``rpm``/``a_lim`` None): the Smith–Tlusty speeds of the chatter
+    (none for a stable cut). With the holder's boundary ``a_lim`` [m] on the speed grid
+    ``rpm`` (a safe boundary when there is one) and the cut's ``depth`` [m]: the windows
+    of :func:`lobe_advice`, and the chatter matched against the tool-point ``modes``.
+    """
+    from taptune.signal.cut import smith_tlusty_speeds
+
+    chatter = analysis.chatter_hz if analysis.verdict != "stable" else None
+    if rpm is None or a_lim is None or depth is None:
+        speeds = () if chatter is None else tuple(smith_tlusty_speeds(
+            chatter, analysis.teeth, analysis.spindle_rpm, min_rpm=min_rpm, max_rpm=max_rpm))
+        return CutAdvice(speeds, "rule", chatter_hz=chatter)
+    warnings = []
+    advice = lobe_advice(rpm, a_lim, depth, analysis.spindle_rpm, min_rpm=min_rpm, max_rpm=max_rpm)
+    mode, matches = None, None
+    if chatter is not None and modes:
+        # The tooth passing aliases the chatter into f_c + k f_tp: a member of the family
+        # within FAMILY_DB of the strongest line that lies on a tool-point mode is the tool's chatter.
+        family = [f for f, db in zip(analysis.family_hz, analysis.family_level_db) if db >= -FAMILY_DB]
+        for f in [chatter] + family:
+            m, ok = match_mode(f, modes)
+            if ok:
+                mode, matches, chatter = m, True, f
+                break
+        else:
+            mode, matches = match_mode(chatter, modes)
+            warnings.append(f"the chatter at {chatter:.0f} Hz matches no tool-point mode of {holder} (nearest "
+                            f"{mode.hz:.0f} Hz): likely the workpiece, the fixture or the spindle; the holder's "
+                            "lobes cannot help with it")
+    if advice.depth_to is not None:
+        warnings.append(f"no speed within {max(min_rpm, float(rpm[0])):.0f}–{float(rpm[-1]):.0f} rpm is stable at "
+                        f"{depth * 1e3:g} mm by the lobes: come down to {advice.depth_to * 1e3:.2g} mm at "
+                        f"{advice.suggested_rpm[0]:.0f} rpm")
+    return CutAdvice(advice.suggested_rpm, "lobes", advice, chatter, None if mode is None else mode.hz, matches,
+                     tuple(warnings))
