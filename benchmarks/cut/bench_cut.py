@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from benchmarks.cut.sounds import simulated_cuts
+from benchmarks.cut.sounds import render_cuts, simulate_batch
 from taptune.machine.lobes import stability_lobes
 from taptune.machine.next_speed import lobe_advice
 from taptune.machine.simulate import ModalSet, simulate_milling
@@ -43,7 +43,7 @@ MAX_RPM = 24000.0
 
 
 def _cached(folder, key: str, make):
-    """``make()`` (a list of picklable cuts), kept in ``folder`` under ``key`` when a folder is given."""
+    """``make()`` (picklable), kept in ``folder`` under ``key`` when a folder is given."""
     if not folder:
         return make()
     import hashlib
@@ -90,9 +90,10 @@ def main(argv=None) -> None:
             shop = dict(noise_db=float(rng.uniform(-35, -20)), hum_hz=float(rng.choice([50.0, 60.0])),
                         fans=int(rng.integers(0, 4)))
             override = float(rng.choice([1.0, 1.0, rng.uniform(0.96, 1.05)]))
-            cuts = _cached(args.cache, f"{cfg['name']}-{rpm:.3f}-{seed}", lambda: simulated_cuts(
+            batch = _cached(args.cache, f"{cfg['name']}-{rpm * override:.3f}-{seed}", lambda: simulate_batch(
                 cfg["mx"], cfg["my"], teeth=cfg["teeth"], ktc=KTC, krc=KRC, diameter=cfg["diameter"], ae=cfg["ae"],
-                milling=cfg["milling"], rpm=rpm, depths=depths, seed=seed, codec=codec, override=override, **shop))
+                milling=cfg["milling"], rpm=rpm * override, depths=depths, seed=seed))
+            cuts = render_cuts(batch, commanded_rpm=rpm, seed=seed, codec=codec, **shop)
             for depth, (rec, truth, growth) in zip(depths, cuts):
                 try:
                     a = analyse_cut(rec, rpm, cfg["teeth"])

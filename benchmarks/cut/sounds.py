@@ -81,18 +81,20 @@ def _coloured_noise(n: int, rng, fs: float, corner_hz: float = 2000.0) -> np.nda
 def shop_sound(cut_signal, rpm: float, teeth: int, *, fs: int = FS, idle_before_s: float = 1.0,
                idle_after_s: float = 0.8, noise_db: float = -30.0, fans: int = 2, hum_hz: float | None = 50.0,
                runout_db: float = -20.0, codec: str | None = None, level: float = 0.3, rng=None,
-               ramp_s: float = 0.15) -> np.ndarray:
+               ramp_s: float = 0.15, normalise: bool = True) -> np.ndarray:
     """The phone's recording of a cut whose sound during the cut is ``cut_signal`` (at ``fs``).
 
     ``noise_db`` is the coolant/chip noise level relative to the cut signal's RMS (over
-    the whole band), ``runout_db`` the spindle-rotation harmonics relative to it; fans and
+    the whole band; relative to 1 with ``normalise=False``, when the cut signal comes in
+    its own units), ``runout_db`` the spindle-rotation harmonics relative to it; fans and
     bearing tones (at fixed frequencies off the spindle harmonics) and the hum sound all
     the time. Entry and exit are ``ramp_s`` ramps of the cut's amplitude. Returns mono
     float samples peaking at ``level``.
     """
     rng = np.random.default_rng(rng)
     s = np.asarray(cut_signal, float)
-    s = s / (np.sqrt(np.mean(s**2)) + 1e-30)
+    if normalise:
+        s = s / (np.sqrt(np.mean(s**2)) + 1e-30)
     n_cut, n0, n1 = len(s), int(idle_before_s * fs), int(idle_after_s * fs)
     n = n0 + n_cut + n1
     t = np.arange(n) / fs
@@ -187,38 +189,67 @@ def vibration_levels(x, fs: float, rpm: float, teeth: int) -> tuple[float | None
     return float(f[i]), float(10 * np.log10(spec[i] / forced))
 
 
+def simulate_batch(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float,
+                   milling: str, rpm: float, depths, seconds: float = 1.6, feed_per_tooth: float = 0.06e-3,
+                   steps: int = 48, seed: int = 0) -> dict:
+    """The milling simulation of cuts at ``rpm`` and each of ``depths`` [m]: the tool's vibration
+    (x + 0.7 y [m]) and force (fx + 0.5 fy [N]) at :data:`FS`, and the growth per tooth period
+    of the linear delay equation (< 1 stable). Plain arrays, so that a benchmark can keep them."""
+    from taptune.machine.simulate import simulate_milling
+
+    # At least 25 steps per period of the fastest mode (a coarser step diverges at large depths).
+    f_max = max(max(modes_x.freq_hz), max(modes_y.freq_hz) if modes_y is not None else 0.0)
+    steps = max(steps, int(np.ceil(25 * 60.0 / (rpm * teeth) * f_max)))
+    common = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, rpm=rpm,
+                  depth=list(depths), fs=FS, feed_per_tooth=feed_per_tooth, steps=steps)
+    run = simulate_milling(modes_x, modes_y, duration_s=seconds, rng=np.random.default_rng(seed), contact_loss=True,
+                           **common)
+    linear = simulate_milling(modes_x, modes_y, duration_s=0.4, rng=np.random.default_rng(seed + 1),
+                              contact_loss=False, **common)
+    x, y = np.atleast_2d(run.x_m), np.atleast_2d(run.y_m)
+    fx, fy = np.atleast_2d(run.fx_n), np.atleast_2d(run.fy_n)
+    return {"rpm": rpm, "teeth": teeth, "depths": list(depths), "vibration": x + 0.7 * y, "force": fx + 0.5 * fy,
+            "growth": np.atleast_1d(linear.growth).astype(float)}
+
+
+def render_cuts(batch: dict, *, commanded_rpm: float | None = None, seed: int = 0, codec=None,
+                **shop) -> list[tuple[Recording, CutTruth, float]]:
+    """Per depth of a :func:`simulate_batch`: (recording, truth, growth). The sound is the tool's
+    acceleration and the cutting force, with random gains, in a shop (:func:`shop_sound`); the
+    entry transient of the simulation (it starts at full depth) is left out."""
+    rng = np.random.default_rng(seed)
+    rpm, teeth = batch["rpm"], batch["teeth"]
+    out = []
+    for vib, force, growth in zip(batch["vibration"], batch["force"], batch["growth"]):
+        skip = int(0.1 * FS)
+        vib, force = vib[skip:], force[skip:]
+        # Each part in units of its robust scale over the steady two thirds (a median, so that
+        # a run whose chatter bursts once is not scaled by that burst), bursts clipped at 8×.
+        def robust(x):
+            x = x - x.mean()
+            # A cut whose steady force does not vary (slotting with 4 teeth) stays quiet: no smaller
+            # a scale than a thousandth of the whole run's.
+            scale = max(1.4826 * np.median(np.abs(x[len(x) // 3:])), 1e-3 * np.std(x)) + 1e-30
+            return np.clip(x / scale, -8, 8)
+
+        acc = np.gradient(np.gradient(vib))
+        g = 10 ** (rng.uniform(-6, 6) / 20)
+        sound = robust(acc) + g * robust(force)
+        f_c, level = vibration_levels(vib, FS, rpm, teeth)
+        chatter = bool(growth > 1.0)
+        rec = shop_sound(sound, rpm, teeth, rng=rng, codec=codec, **shop)
+        out.append((as_recording(rec, lossy=bool(codec)),
+                    CutTruth(rpm, commanded_rpm or rpm, teeth, f_c if chatter else None, level if chatter else None,
+                             "chatter" if chatter else "stable"), float(growth)))
+    return out
+
+
 def simulated_cuts(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
                    rpm: float, depths, seconds: float = 1.6, feed_per_tooth: float = 0.06e-3, steps: int = 48,
                    seed: int = 0, codec=None, override: float = 1.0, **shop) -> list[tuple[Recording, CutTruth, float]]:
-    """Cuts at ``rpm`` × ``override`` and each of ``depths`` [m] from the milling simulation, as recordings.
-
-    Returns per depth (recording, truth, growth per tooth period of the linear delay
-    equation: < 1 stable). The sound is the tool's acceleration and the cutting force,
-    with random gains, in a shop (:func:`shop_sound`).
-    """
-    from taptune.machine.simulate import simulate_milling
-
-    rng = np.random.default_rng(seed)
-    actual = rpm * override
-    common = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, rpm=actual,
-                  depth=list(depths), fs=FS, feed_per_tooth=feed_per_tooth, steps=steps)
-    run = simulate_milling(modes_x, modes_y, duration_s=seconds, rng=rng, contact_loss=True, **common)
-    linear = simulate_milling(modes_x, modes_y, duration_s=0.4, rng=np.random.default_rng(seed + 1),
-                              contact_loss=False, **common)
-    out = []
-    for i, depth in enumerate(depths):
-        x, y = np.atleast_2d(run.x_m)[i], np.atleast_2d(run.y_m)[i]
-        fx, fy = np.atleast_2d(run.fx_n)[i], np.atleast_2d(run.fy_n)[i]
-        vib = x + 0.7 * y
-        acc = np.gradient(np.gradient(vib)) * FS**2
-        force = fx + 0.5 * fy
-        g = 10 ** (rng.uniform(-6, 6) / 20)
-        sound = acc / (np.std(acc) + 1e-30) + g * force / (np.std(force) + 1e-30)
-        f_c, level = vibration_levels(vib, FS, actual, teeth)
-        growth = float(np.atleast_1d(linear.growth)[i])
-        chatter = growth > 1.0
-        kind = "chatter" if chatter else "stable"
-        rec = shop_sound(sound, actual, teeth, rng=rng, codec=codec, **shop)
-        out.append((as_recording(rec, lossy=bool(codec)),
-                    CutTruth(actual, rpm, teeth, f_c if chatter else None, level if chatter else None, kind), growth))
-    return out
+    """Cuts commanded at ``rpm``, turned at ``rpm`` × ``override``, at each of ``depths`` [m]:
+    :func:`simulate_batch` then :func:`render_cuts`."""
+    batch = simulate_batch(modes_x, modes_y, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
+                           milling=milling, rpm=rpm * override, depths=depths, seconds=seconds,
+                           feed_per_tooth=feed_per_tooth, steps=steps, seed=seed)
+    return render_cuts(batch, commanded_rpm=rpm, seed=seed, codec=codec, **shop)
