@@ -124,19 +124,36 @@ class Lobes:
     pockets: tuple = ()
     curves: tuple = field(default=(), repr=False)
     warnings: tuple = ()
+    method: str = "zoa"
+    flip: np.ndarray = field(default=None, repr=False)
+    depth_cap: float = float("inf")
+    modes: tuple = field(default=(), repr=False)
+    notes: tuple = ()
+
+    @property
+    def instability(self) -> list[str]:
+        """Per speed "flip" (period doubling: the critical Floquet multiplier is real and
+        negative) or "hopf" (complex); the zero-order lobes know only "hopf"."""
+        flip = np.zeros(len(self.rpm), bool) if self.flip is None else np.asarray(self.flip, bool)
+        return ["flip" if f else "hopf" for f in flip]
 
     def to_dict(self) -> dict:
-        """MACHINE.md's ``lobes`` JSON (mm, rpm, Hz); non-finite values are null."""
+        """The ``lobes`` JSON (mm, rpm, Hz); non-finite values are null; depths above the
+        cap are reported at the cap."""
 
         def num(v, scale=1.0):
             return float(v) / scale if np.isfinite(v) else None
 
+        cap = self.depth_cap
         return {
+            "method": self.method,
             "rpm": [float(r) for r in self.rpm],
-            "a_lim_mm": [num(a, MM) for a in self.a_lim],
-            "a_crit_mm": num(self.a_crit, MM),
-            "pockets": [{"rpm": float(r), "a_lim_mm": float(a) / MM} for r, a in self.pockets],
+            "a_lim_mm": [num(min(a, cap), MM) for a in self.a_lim],
+            "a_crit_mm": num(min(self.a_crit, cap), MM),
+            "pockets": [{"rpm": float(r), "a_lim_mm": min(float(a), cap) / MM} for r, a in self.pockets],
             "chatter_hz": [num(f) for f in self.chatter_hz],
+            "instability": self.instability,
+            "depth_cap_mm": num(cap, MM),
         }
 
 
@@ -338,9 +355,9 @@ class LobeCurves(Sequence):
         return k, np.where(np.isfinite(self._a[r]), n, np.nan), self._a[r]
 
 
-def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,
-                    ae: float, milling: str, rpm, refine: int = 8) -> Lobes:
-    """Zero-order stability lobes of a milling cut (MODEL.md §11).
+def zoa_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,
+              ae: float, milling: str, rpm, refine: int = 8) -> Lobes:
+    """Zero-order stability lobes of a milling cut (Altintas & Budak 1995).
 
     Parameters
     ----------
@@ -429,3 +446,96 @@ def _pockets(grid, a) -> tuple:
     i = np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:]) & fin[1:-1] & fin[:-2] & fin[2:]) + 1
     i = i[np.argsort(-a[i])]
     return tuple((float(grid[j]), float(a[j])) for j in i)
+
+
+METHODS = ("auto", "zoa", "sdm")
+
+
+def fit_modes(freq_hz, phi_xx, phi_yy, what: str = "tool-point FRF"):
+    """(ModalSet x, ModalSet y or None for a rigid y, notes) fitted to the tool-point FRFs."""
+    from taptune.machine.simulate import modal_fit
+
+    notes = []
+    fx = modal_fit(freq_hz, phi_xx, what=f"{what} (x)")
+    notes.append(f"x: {fx.modes.n_modes} mode(s) reproduce the FRF to {100 * fx.rel_error:.1f} %")
+    if phi_yy is None or phi_yy is phi_xx or np.array_equal(phi_yy, phi_xx):
+        return fx.modes, fx.modes, notes[:1] + ["y: the x modes"]
+    if np.max(np.abs(phi_yy)) < 1e-6 * np.max(np.abs(phi_xx)):
+        return fx.modes, None, notes + ["y: rigid"]
+    fy = modal_fit(freq_hz, phi_yy, what=f"{what} (y)")
+    notes.append(f"y: {fy.modes.n_modes} mode(s) reproduce the FRF to {100 * fy.rel_error:.1f} %")
+    return fx.modes, fy.modes, notes
+
+
+def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,
+                    ae: float, milling: str, rpm, refine: int = 8, method: str = "zoa",
+                    depth_cap: float = float("inf"), modes=None) -> Lobes:
+    """Stability lobes of a milling cut, zero-order or by semi-discretization.
+
+    Parameters
+    ----------
+    freq_hz, phi_xx, phi_yy, teeth, ktc, krc, diameter, ae, milling, rpm, refine
+        As :func:`zoa_lobes` (SI: Hz, m/N, N/m², m).
+    method : {"zoa", "sdm", "auto"}
+        "zoa": the zero-order approximation (fast, the average force: a preview); "sdm":
+        the semi-discretization of :mod:`taptune.machine.sdm` on modes fitted to the FRFs
+        (flip and Hopf lobes of intermittent cuts; InputError when the modes cannot
+        reproduce an FRF); "auto": SDM, or the ZOA with a warning when no modal fit
+        reproduces the FRFs. Even slotting with two teeth differs by ≈ 10 % between
+        the two, so "auto" never takes the average on trust.
+    depth_cap : float
+        Largest depth the tool can cut [m] (its flute length); :meth:`Lobes.to_dict`
+        reports no limit above it and the SDM does not search beyond it.
+    modes : (ModalSet, ModalSet or None), optional
+        Tool-point modes in x and y for the SDM instead of fitting them to the FRFs.
+
+    Returns
+    -------
+    Lobes
+        ``method`` says which was used; ``flip`` per speed; ``notes`` how well the modes
+        reproduce the FRFs.
+    """
+    from dataclasses import replace
+
+    if method not in METHODS:
+        raise InputError(f"the lobes method must be one of {', '.join(METHODS)}, got {method!r}")
+    if not (depth_cap > 0):
+        raise InputError(f"the depth cap must be > 0 mm, got {depth_cap / MM:g}")
+    zoa = zoa_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
+                    milling=milling, rpm=rpm, refine=refine)
+    zoa = replace(zoa, depth_cap=float(depth_cap))
+    if method == "zoa":
+        return zoa
+    from taptune.machine.sdm import sdm_lobes
+
+    if modes is None:
+        f = np.asarray(freq_hz, dtype=float)
+        pyy = None if phi_yy is None else np.asarray(phi_yy, dtype=complex)
+        try:
+            mx, my, notes = fit_modes(f, np.asarray(phi_xx, dtype=complex), pyy)
+        except InputError as err:
+            if method == "sdm":
+                raise
+            return replace(zoa, warnings=zoa.warnings + (f"{err}; zero-order lobes instead (the flip lobes of an "
+                                                         "intermittent cut are missing)",))
+    else:
+        (mx, my), notes = modes, []
+    speeds = np.asarray(rpm, dtype=float)
+    order = np.argsort(zoa.rpm)
+
+    def guide(r):
+        return np.interp(r, zoa.rpm[order], np.where(np.isfinite(zoa.a_lim), zoa.a_lim, zoa.a_crit)[order])
+
+    s = sdm_lobes(mx, my, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, rpm=speeds,
+                  depth_cap=depth_cap, guide=guide)
+    gap = np.isnan(s.a_lim)  # speeds left to the zero-order lobes
+    a = np.where(gap, zoa.a_lim, s.a_lim)
+    chatter = np.where(gap, zoa.chatter_hz, s.chatter_hz)
+    flip = np.where(gap, False, s.flip)
+    order = np.argsort(speeds)
+    grid, best = speeds[order], a[order]
+    finite = a[np.isfinite(a)]
+    a_crit = float(finite.min()) if finite.size else float("inf")
+    return Lobes(rpm=speeds, a_lim=a, chatter_hz=chatter, a_crit=a_crit, pockets=_pockets(grid, best),
+                 curves=(), warnings=tuple(w for w in zoa.warnings + s.warnings), method="sdm", flip=flip,
+                 depth_cap=float(depth_cap), modes=(mx, my), notes=tuple(notes))

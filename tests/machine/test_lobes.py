@@ -91,7 +91,7 @@ def test_boundary_pockets_and_json():
     best_rpm, best_a = lobes.pockets[0]
     assert best_a == pytest.approx(lobes.a_lim.max(), rel=1e-9) or best_a < lobes.a_lim.max()
     d = lobes.to_dict()
-    assert set(d) == {"rpm", "a_lim_mm", "a_crit_mm", "pockets", "chatter_hz"}
+    assert set(d) == {"rpm", "a_lim_mm", "a_crit_mm", "pockets", "chatter_hz", "method", "instability", "depth_cap_mm"}
     assert d["a_crit_mm"] == pytest.approx(lobes.a_crit / MM) and len(d["rpm"]) == len(rpm)
     assert d["pockets"][0] == {"rpm": best_rpm, "a_lim_mm": pytest.approx(best_a / MM)}
 

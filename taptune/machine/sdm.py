@@ -1,0 +1,493 @@
+"""Milling stability by semi-discretization: the regenerative delay kept, the cut intermittent.
+
+The zero-order lobes (lobes.py) average the cutting forces over a revolution; with few
+teeth or light radial cuts the force acts in short pulses and the average misses the
+period-doubling (flip) lobes and misplaces the others. Here the delay equation of the
+cut (tool-point modes from :func:`taptune.machine.simulate.modal_fit`, forces as in
+:mod:`taptune.machine.simulate`, feed along x)
+
+    ẏ = A y + a B H(t) (C y(t) − C y(t − T)),   T = 60 / (N rpm),
+
+is turned into a map over one tooth period (its monodromy matrix Φ), and the cut is
+stable when every eigenvalue (Floquet multiplier) of Φ lies inside the unit circle
+(Insperger & Stépán 2002, Int. J. Numer. Meth. Eng. 55; 2004, Int. J. Numer. Meth. Eng.
+61; Bayly et al. 2003 for the 2-D milling form). The multiplier that leaves the circle
+tells the kind of chatter: real and negative is a **flip** (period doubling, chatter at
+half the tooth-passing frequency and its odd multiples), complex is a **Hopf** (chatter
+at a frequency unrelated to the tooth passing).
+
+The discretisation:
+
+* The period splits into the active part, where some tooth cuts, and the free flight;
+  the free flight is one exact modal exponential, whatever its length.
+* The active part is cut into steps, ``STEPS_PER_MODE`` per period of the fastest mode
+  (and at least two between history nodes). Over each step the modes move exactly
+  (modal exponential, closed form), the cutting force of the step acts at its midpoint
+  (second-order accurate, like the first-order semi-discretization's step).
+* The position one period back, x(t − T), is held at Chebyshev–Lobatto nodes over the
+  previous active part (``p + 1`` of them, more the more mode periods the active part
+  spans) and interpolated between them: the map's size is d + 2(p + 1) (d = twice the
+  number of modes), independent of the step, so fine steps stay cheap.
+
+The limit at one speed is the smallest depth whose largest multiplier reaches 1, found
+by bracketing then regula falsi on log|μ| (to ``DEPTH_RTOL``), vectorised over the speeds.
+SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
+fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in relative speed
+(flip lobes are narrow), and interpolated onto
+the requested grid (linear in the tooth period). Where lobes are narrower than the speed
+window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
+``REL_SPACING_DENSE`` and the limit reported is the lowest over that window.
+
+Signatures::
+
+    sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
+              depth_cap=inf, guide=None) -> SdmLobes
+    sdm_growth(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
+               steps_per_mode=None, nodes=None) -> (|μ|max, μ)     # one speed, many depths
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from taptune.errors import InputError
+from taptune.machine.lobes import engagement_angles
+
+#: Steps per period of the fastest mode in the active part of a tooth period.
+STEPS_PER_MODE = 24
+#: History nodes: this many, plus NODES_PER_PERIOD per period of the fastest mode in the active part.
+MIN_NODES = 8
+NODES_PER_PERIOD = 4.0
+#: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
+MAX_NODES = 48
+#: Relative tolerance of the limiting depth.
+DEPTH_RTOL = 5e-3
+#: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
+SAMPLES_PER_LOBE = 16
+REL_SPACING_MIN = 0.0035
+REL_SPACING_MAX = 0.005
+REL_SPACING_DENSE = 0.01
+#: Lobes narrower than this relative speed window (±1.5 %) are not resolved point by point.
+DENSE_WINDOW = 0.015
+#: Rounds of extra samples beside each local minimum and maximum of the sampled limit.
+REFINE_ROUNDS = 2
+#: Speeds per batch of monodromy matrices (bounds the temporary arrays).
+BATCH = 256
+
+
+@dataclass(frozen=True)
+class SdmLobes:
+    """The semi-discretization boundary on a speed grid (SI: m).
+
+    ``a_lim`` [m] per speed (inf where no depth up to ``depth_cap`` chatters),
+    ``flip`` True where the critical multiplier is real and negative (period doubling),
+    ``chatter_hz`` the dominant chatter frequency on the boundary (from the critical
+    multiplier's angle, folded to the band of the modes), ``sample_rpm``/``sample_a``
+    the speeds actually computed and their limits, ``warnings``.
+    """
+
+    rpm: np.ndarray = field(repr=False)
+    a_lim: np.ndarray = field(repr=False)
+    flip: np.ndarray = field(repr=False)
+    chatter_hz: np.ndarray = field(repr=False)
+    sample_rpm: np.ndarray = field(repr=False)
+    sample_a: np.ndarray = field(repr=False)
+    warnings: tuple = ()
+
+
+def _modal(modes_x, modes_y):
+    """(direction, ω_n, ζ, k) per mode, x first (modes_y None: rigid y)."""
+    from taptune.machine.simulate import _mode_columns
+
+    return _mode_columns(modes_x, modes_y)
+
+
+def _geometry(teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str):
+    """(φ_st, φ_ex, active fraction of the tooth period, arc per tooth pitch)."""
+    st, ex = engagement_angles(ae, diameter, milling)
+    pitch = 2 * np.pi / teeth
+    return st, ex, min(ex - st, pitch) / pitch
+
+
+def _cutting_matrix(phase, teeth: int, ktc: float, krc: float, st: float, ex: float) -> np.ndarray:
+    """H(φ) = Σ_j g_j u_j w_jᵀ [N/m² per unit depth], shape phase.shape + (2, 2); φ of tooth 0."""
+    ang = phase[..., None] + 2 * np.pi * np.arange(teeth) / teeth
+    ang = np.mod(ang, 2 * np.pi)
+    g = (ang >= st - 1e-12) & (ang <= ex + 1e-12)
+    s, c = np.sin(ang) * g, np.cos(ang) * g
+    # u = (−(K_tc cos φ + K_rc sin φ), K_tc sin φ − K_rc cos φ), w = (sin φ, cos φ)
+    ux, uy = -(ktc * c + krc * s), ktc * s - krc * c
+    h = np.empty(phase.shape + (2, 2))
+    h[..., 0, 0] = np.sum(ux * s, -1)
+    h[..., 0, 1] = np.sum(ux * c, -1)
+    h[..., 1, 0] = np.sum(uy * s, -1)
+    h[..., 1, 1] = np.sum(uy * c, -1)
+    return h
+
+
+def _mode_propagator(wn, z, dt):
+    """Exact free motion of each mode over dt: (e00, e01, e10, e11), each shape dt.shape + (M,)."""
+    dt = np.asarray(dt, dtype=float)[..., None]
+    wd = wn * np.sqrt(1 - z * z)
+    decay = np.exp(-z * wn * dt)
+    c, s = np.cos(wd * dt), np.sin(wd * dt)
+    e00 = decay * (c + z * wn / wd * s)
+    e01 = decay * s / wd
+    e10 = -decay * wn * wn / wd * s
+    e11 = decay * (c - z * wn / wd * s)
+    return e00, e01, e10, e11
+
+
+def _propagate(e, q, v):
+    """Apply a mode propagator to modal rows q, v of shape (b, M, n)."""
+    e00, e01, e10, e11 = (x[..., None] for x in e)
+    q2 = e00 * q
+    q2 += e01 * v
+    v *= e11
+    v += e10 * q
+    return q2, v
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """Time grid of one batch (shared by its speeds, in fractions of the active part)."""
+
+    nodes: np.ndarray  # Chebyshev–Lobatto node fractions, (p+1,)
+    edges: np.ndarray  # step edges as fractions, (s+1,), containing every node
+    node_step: np.ndarray  # step edge index of each node
+    interp: np.ndarray  # Lagrange rows at the step midpoints, (s, p+1)
+
+
+def _lagrange(nodes, t) -> np.ndarray:
+    """Barycentric Lagrange interpolation rows (len(t), len(nodes))."""
+    w = np.array([1.0 / np.prod([nodes[j] - nodes[k] for k in range(len(nodes)) if k != j]) for j in range(len(nodes))])
+    d = t[:, None] - nodes[None, :]
+    exact = np.isclose(d, 0.0, atol=1e-15)
+    d = np.where(exact, 1.0, d)
+    r = w / d
+    r = r / r.sum(axis=1, keepdims=True)
+    hit = exact.any(axis=1)
+    r[hit] = exact[hit].astype(float)
+    return r
+
+
+def _plan(p: int, steps_between) -> _Plan:
+    nodes = 0.5 * (1 - np.cos(np.pi * np.arange(p + 1) / p))
+    edges = [0.0]
+    node_step = [0]
+    for k in range(p):
+        q = int(steps_between[k])
+        edges += list(nodes[k] + (nodes[k + 1] - nodes[k]) * np.arange(1, q + 1) / q)
+        node_step.append(len(edges) - 1)
+    edges = np.array(edges)
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    return _Plan(nodes, edges, np.array(node_step), _lagrange(nodes, mid))
+
+
+def _resolution(active_s, f_max: float, steps_per_mode: float | None, nodes: int | None):
+    """(p, steps between successive nodes) for an active part of ``active_s`` seconds."""
+    periods = active_s * f_max
+    p = int(nodes) if nodes else int(np.clip(np.ceil(MIN_NODES + NODES_PER_PERIOD * periods), MIN_NODES, 10**6))
+    frac = np.diff(0.5 * (1 - np.cos(np.pi * np.arange(p + 1) / p)))
+    per_mode = STEPS_PER_MODE if steps_per_mode is None else steps_per_mode
+    return p, np.maximum(2, np.ceil(frac * periods * per_mode)).astype(int)
+
+
+def _monodromy(cols, geom, teeth, ktc, krc, tau, depth, plan: _Plan) -> np.ndarray:
+    """Monodromy matrices of a batch: tooth periods ``tau`` (b,), depths ``depth`` (b,) → (b, n, n).
+
+    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
+    """
+    d, wn, z, k = cols
+    st, ex, frac = geom
+    nm = len(wn)
+    p1 = len(plan.nodes)
+    n = 2 * nm + 2 * p1
+    b = len(tau)
+    active = frac * tau  # seconds
+    # Rows: q and v of each mode in terms of z; start at identity.
+    q = np.zeros((b, nm, n))
+    v = np.zeros((b, nm, n))
+    q[:, np.arange(nm), np.arange(nm)] = 1.0
+    v[:, np.arange(nm), nm + np.arange(nm)] = 1.0
+    hist = 2 * nm + 2 * np.arange(p1)  # column of x at node j; y at +1
+    sel = np.zeros((nm, 2))
+    sel[np.arange(nm), d] = 1.0
+    gain = wn * wn / k  # modal acceleration per newton
+    new_hist = np.zeros((b, 2 * p1, n))
+    omega = 2 * np.pi / (teeth * tau)  # rad/s of the spindle
+    h_steps = np.diff(plan.edges)
+    node_at = {int(s): j for j, s in enumerate(plan.node_step)}
+    new_hist[:, 0:2] = np.einsum("mi,bmn->bin", sel, q)
+    for i, hfrac in enumerate(h_steps):
+        h = hfrac * active  # (b,)
+        half = _mode_propagator(wn, z, 0.5 * h)
+        q, v = _propagate(half, q, v)
+        tmid = (plan.edges[i] + 0.5 * hfrac) * active
+        hm = _cutting_matrix(st + omega * tmid, teeth, ktc, krc, st, ex)  # (b, 2, 2)
+        x = np.einsum("mi,bmn->bin", sel, q)  # (b, 2, n)
+        lag = plan.interp[i]
+        xd = np.zeros((b, 2, n))
+        xd[:, 0, hist] = lag
+        xd[:, 1, hist + 1] = lag
+        force = np.einsum("bij,bjn->bin", hm, x - xd) * (depth * h)[:, None, None]  # impulse per unit z
+        v = v + gain[None, :, None] * np.einsum("mi,bin->bmn", sel, force)
+        q, v = _propagate(half, q, v)
+        if i + 1 in node_at:
+            j = node_at[i + 1]
+            new_hist[:, 2 * j: 2 * j + 2] = np.einsum("mi,bmn->bin", sel, q)
+    free = (1 - frac) * tau
+    if np.any(free > 0):
+        q, v = _propagate(_mode_propagator(wn, z, free), q, v)
+    return np.concatenate([q, v, new_hist], axis=1)
+
+
+def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
+    """(largest |μ|, that μ) of each monodromy matrix."""
+    mu = np.linalg.eigvals(phi)
+    i = np.argmax(np.abs(mu), axis=-1)
+    top = np.take_along_axis(mu, i[..., None], -1)[..., 0]
+    return np.abs(top), top
+
+
+def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
+               rpm: float, depth, steps_per_mode: float | None = None, nodes: int | None = None):
+    """Largest Floquet multiplier |μ| and μ at one speed for each depth [m] (array)."""
+    cols = _modal(modes_x, modes_y)
+    geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
+    a = np.atleast_1d(np.asarray(depth, dtype=float))
+    tau = 60.0 / (rpm * teeth)
+    f_max = cols[1].max() / (2 * np.pi)
+    p, between = _resolution(geom[2] * tau, f_max, steps_per_mode, nodes)
+    phi = _monodromy(cols, geom, teeth, ktc, krc, np.full(a.size, tau), a, _plan(p, between))
+    return _critical(phi)
+
+
+def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """SDM speeds (ascending) and whether each lies where the lobes are too dense to resolve."""
+    tau_lo, tau_hi = 60.0 / (rpm_hi * teeth), 60.0 / (rpm_lo * teeth)
+    taus = [tau_lo]
+    dense = [False]
+    while taus[-1] < tau_hi:
+        t = taus[-1]
+        lobe = 1.0 / (SAMPLES_PER_LOBE * f_max)
+        step = float(np.clip(lobe, REL_SPACING_MIN * t, REL_SPACING_MAX * t))
+        is_dense = 1.0 / (f_max * t) < 2 * DENSE_WINDOW  # a lobe spans n/(τ f) of the speed
+        if is_dense:
+            step = max(step, REL_SPACING_DENSE * t)
+        taus.append(min(t + step, tau_hi))
+        dense.append(is_dense)
+    taus = np.array(taus)
+    return 60.0 / (teeth * taus[::-1]), np.array(dense[::-1])
+
+
+def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
+              rpm, depth_cap: float = np.inf, guide=None) -> SdmLobes:
+    """Semi-discretization lobes on the speed grid ``rpm`` (module docstring).
+
+    Parameters
+    ----------
+    modes_x, modes_y : ModalSet
+        Tool-point modes in x (feed) and y (None: rigid).
+    teeth, ktc, krc, diameter, ae, milling
+        The cut (SI: N/m², m).
+    rpm : array_like
+        Spindle speeds [rpm], > 0.
+    depth_cap : float
+        Depths above this [m] are not searched (the flute length); a speed stable up to it
+        gets inf.
+    guide : callable, optional
+        rpm array → a first guess of the limit [m] (e.g. the zero-order lobes); speeds
+        the search starts from it, else from the static limit of the softest mode.
+
+    Returns
+    -------
+    SdmLobes
+    """
+    speeds = np.asarray(rpm, dtype=float)
+    if speeds.ndim != 1 or speeds.size == 0 or np.any(~(speeds > 0)) or np.any(~np.isfinite(speeds)):
+        raise InputError("the spindle speeds must be finite and > 0 rpm")
+    if not (ktc > 0 and krc >= 0):
+        raise InputError("K_tc must be > 0 and K_rc >= 0")
+    cols = _modal(modes_x, modes_y)
+    geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
+    f_max = cols[1].max() / (2 * np.pi)
+    lo, hi = float(speeds.min()), float(speeds.max())
+    if hi / lo - 1 < 1e-9:
+        samples, dense = np.array([lo]), np.array([False])
+    else:
+        samples, dense = _sample_speeds(lo, hi, teeth, f_max)
+        if samples.size > speeds.size:  # never more work than the grid itself
+            samples = np.unique(speeds)
+            dense = np.zeros(samples.size, bool)
+    tau = 60.0 / (teeth * samples)
+    periods = geom[2] * tau * f_max
+    p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
+    ok = p_need <= MAX_NODES
+    warnings = []
+    if not ok.all():
+        slow = samples[~ok]
+        warnings.append(f"below {slow.max():.0f} rpm the cut spans too many vibration periods for the "
+                        f"semi-discretization's history ({MAX_NODES} nodes); the zero-order lobes are used there")
+    a_s = np.full(samples.size, np.inf)
+    flip_s = np.zeros(samples.size, bool)
+    chat_s = np.full(samples.size, np.nan)
+    if guide is not None:
+        start = np.asarray(guide(samples), dtype=float)
+    else:
+        start = np.full(samples.size, np.nan)
+    k_min = np.min(cols[3])
+    fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
+    start = np.where(np.isfinite(start) & (start > 0), start, fallback)
+    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap)
+    a_s, flip_s, chat_s = _limits(run, tau, start, ok)
+    # The lowest points of the lobes (the critical depth lies there) and the pocket tops
+    # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
+    for _ in range(REFINE_ROUNDS):
+        fin = np.where(np.isfinite(a_s), a_s, np.inf)
+        inner = np.arange(1, samples.size - 1)
+        ext = inner[((fin[inner] < fin[inner - 1]) & (fin[inner] <= fin[inner + 1]))
+                    | ((fin[inner] > fin[inner - 1]) & (fin[inner] >= fin[inner + 1]) & np.isfinite(fin[inner]))]
+        ext = ext[ok[ext] & ~dense[ext]]
+        if ext.size == 0:
+            break
+        new = np.unique(np.concatenate([0.5 * (samples[ext - 1] + samples[ext]), 0.5 * (samples[ext] + samples[ext + 1])]))
+        new = np.setdiff1d(new, samples)
+        tau_n = 60.0 / (teeth * new)
+        guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
+        guess = np.where(np.isfinite(guess), guess, start[0])
+        a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool))
+        samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
+        cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
+        a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
+        dense, ok = cat(dense, np.zeros(new.size, bool)), cat(ok, np.ones(new.size, bool))
+        tau = 60.0 / (teeth * samples)
+        start = cat(start, guess)
+    return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
+
+
+def _limits(run, tau, start, ok):
+    """Limit, flip flag and chatter frequency at each tooth period ``tau`` where ``ok``."""
+    cols, geom, teeth, ktc, krc, f_max, depth_cap = run
+    a_s = np.full(tau.size, np.inf)
+    flip_s = np.zeros(tau.size, bool)
+    chat_s = np.full(tau.size, np.nan)
+    idx = np.flatnonzero(ok)
+    p_need = geom[2] * tau * f_max
+    # Batches of similar resolution: sorted by the node count they need.
+    order = idx[np.argsort(p_need[idx], kind="stable")]
+    for chunk in np.array_split(order, max(1, int(np.ceil(order.size / BATCH)))):
+        if chunk.size == 0:
+            continue
+        p, between = _resolution(geom[2] * tau[chunk].max(), f_max, None, None)
+        plan = _plan(p, between)
+        a, fl, ch = _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, plan)
+        a_s[chunk], flip_s[chunk], chat_s[chunk] = a, fl, ch
+    return a_s, flip_s, chat_s
+
+
+def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan):
+    """Limiting depth per speed: bracket by factors of 2 from ``start``, then regula falsi on log|μ|."""
+    b = tau.size
+    lo = np.zeros(b)  # largest depth known stable
+    hi = np.full(b, np.inf)  # smallest known unstable
+    glo = np.full(b, np.nan)  # log|μ| at lo (NaN: at zero depth, not evaluated)
+    ghi = np.full(b, np.nan)
+    mu_hi = np.full(b, np.nan + 0j)
+    trial = np.minimum(0.7 * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
+    done = np.zeros(b, bool)
+    side = np.zeros(b, int)  # Illinois: which end was kept last time
+    for _ in range(60):
+        act = np.flatnonzero(~done)
+        if act.size == 0:
+            break
+        rho, mu = _critical(_monodromy(cols, geom, teeth, ktc, krc, tau[act], trial[act], plan))
+        g = np.log(rho)
+        unstable = g >= 0
+        for sel, is_unst in ((act[unstable], True), (act[~unstable], False)):
+            gs = g[unstable] if is_unst else g[~unstable]
+            if is_unst:
+                hi[sel], ghi[sel], mu_hi[sel] = trial[sel], gs, mu[unstable]
+            else:
+                lo[sel], glo[sel] = trial[sel], gs
+        # Next trial depth.
+        nxt = trial.copy()
+        for j in act:
+            if not np.isfinite(hi[j]):
+                if lo[j] >= depth_cap * (1 - 1e-9):
+                    done[j] = True
+                    continue
+                nxt[j] = min(2 * max(lo[j], trial[j]), depth_cap)
+                continue
+            if lo[j] == 0 and np.isnan(glo[j]):
+                nxt[j] = 0.25 * hi[j]
+                continue
+            if hi[j] / lo[j] - 1 < DEPTH_RTOL:
+                done[j] = True
+                continue
+            # Regula falsi in (log a, log|μ|), Illinois-weighted, kept inside the bracket.
+            wl, wh = glo[j], ghi[j]
+            if side[j] == 1:
+                wl = 0.5 * wl
+            elif side[j] == -1:
+                wh = 0.5 * wh
+            x0, x1 = np.log(lo[j]), np.log(hi[j])
+            x = x0 - wl * (x1 - x0) / (wh - wl) if wh != wl else 0.5 * (x0 + x1)
+            span = x1 - x0
+            x = float(np.clip(x, x0 + 0.02 * span, x1 - 0.02 * span))
+            nxt[j] = np.exp(x)
+            side[j] = 1 if trial[j] == hi[j] else -1
+        trial = nxt
+    out = np.where(np.isfinite(hi), np.sqrt(np.maximum(lo, 1e-300) * hi), np.inf)
+    out = np.where(np.isfinite(hi) & (lo == 0), hi, out)
+    flip = np.isfinite(hi) & (mu_hi.real < 0) & (np.abs(mu_hi.imag) <= 1e-3 * np.abs(mu_hi))
+    # Chatter frequency: the multiplier's angle θ gives f = (θ/2π + k)/T; the k nearest a mode is kept.
+    theta = np.abs(np.angle(mu_hi))
+    chatter = np.full(tau.size, np.nan)
+    fin = np.isfinite(hi)
+    if fin.any():
+        fm = cols[1] / (2 * np.pi)
+        t = tau[fin][:, None]
+        kk = np.arange(0, 400)[None, :]
+        th = theta[fin][:, None] / (2 * np.pi)
+        cand = np.concatenate([(kk + th) / t, (kk + 1 - th) / t], axis=1)  # (f, 800) [Hz]
+        dist = np.min(np.abs(cand[:, :, None] - fm[None, None, :]) / fm[None, None, :], axis=2)
+        chatter[fin] = cand[np.arange(cand.shape[0]), np.argmin(dist, axis=1)]
+    return out, flip, chatter
+
+
+def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLobes:
+    """Sampled limits onto the requested grid: linear in the tooth period; over the dense
+    part the lowest limit within ±DENSE_WINDOW."""
+    order = np.argsort(speeds)
+    grid = speeds[order]
+    if samples.size == 1:
+        a = np.full(grid.size, a_s[0])
+        fl = np.full(grid.size, flip_s[0])
+        ch = np.full(grid.size, chat_s[0])
+    else:
+        inv_s, inv_g = 1.0 / samples, 1.0 / grid
+        big = np.where(np.isfinite(a_s), a_s, np.nan)
+        cap = np.nanmax(big) * 1e3 if np.isfinite(big).any() else 1.0
+        filled = np.where(np.isfinite(a_s), a_s, cap)
+        a = np.interp(inv_g, inv_s[::-1], filled[::-1])
+        near = np.clip(np.searchsorted(samples, grid), 0, samples.size - 1)
+        left = np.clip(near - 1, 0, samples.size - 1)
+        near = np.where(np.abs(samples[left] - grid) < np.abs(samples[near] - grid), left, near)
+        fl, ch = flip_s[near], chat_s[near]
+        ch = np.where(fl, ch * grid / samples[near], ch)  # a flip chatters at (k + ½) f_T of its own speed
+        inf_near = ~np.isfinite(a_s[near])
+        a = np.where(inf_near, np.inf, a)
+        if dense.any():
+            lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
+            hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")
+            in_dense = dense[near]
+            for i in np.flatnonzero(in_dense):
+                a[i] = np.min(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)])
+        a = np.where(ok[near], a, np.nan)  # left to the zero-order lobes
+    out_a, out_f, out_c = np.empty(grid.size), np.empty(grid.size, bool), np.empty(grid.size)
+    out_a[order], out_f[order], out_c[order] = a, fl, ch
+    return SdmLobes(rpm=speeds, a_lim=out_a, flip=out_f, chatter_hz=out_c, sample_rpm=samples, sample_a=a_s,
+                    warnings=warnings)

@@ -1,0 +1,83 @@
+"""Semi-discretization lobes (taptune.machine.sdm) against published benchmark values and
+against the time-domain simulation of taptune.machine.simulate, never against the ZOA.
+
+1-DOF benchmark (Insperger & Stépán 2004; Insperger et al. 2008): 2 teeth, K_t 6e8 N/m²,
+K_n 2e8 N/m², f_n 922 Hz, ζ 0.011, k 1.34e6 N/m, down-milling. At a/D = 0.05 its lowest
+limit is ≈ 1.09 mm on a flip lobe near 18,200 rpm; at a/D = 0.1 ≈ 0.75 mm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from taptune.machine import stability_lobes
+from taptune.errors import InputError
+from taptune.machine.sdm import sdm_growth, sdm_lobes
+from taptune.machine.simulate import ModalSet, simulate_milling
+
+MM = 1e-3
+BENCH = ModalSet([922.0], [0.011], [1.34e6])
+CUT = dict(teeth=2, ktc=6e8, krc=2e8, diameter=20 * MM, milling="down")
+END_MILL_X = ModalSet([2900.0, 4300.0], [0.012, 0.02], [2.0e7, 6.0e7])
+END_MILL_Y = ModalSet([2880.0, 4350.0], [0.012, 0.02], [1.8e7, 6.5e7])
+
+
+@pytest.mark.parametrize("ae, a_min, rpm_min", [(1 * MM, 1.09 * MM, 18200.0), (2 * MM, 0.75 * MM, 18150.0)])
+def test_benchmark_lowest_limit_is_a_flip_lobe_near_18000_rpm(ae, a_min, rpm_min):
+    lobes = sdm_lobes(BENCH, None, ae=ae, rpm=np.arange(17000.0, 19500.0, 10.0), **CUT)
+    i = np.argmin(lobes.a_lim)
+    assert lobes.a_lim[i] == pytest.approx(a_min, rel=0.015)
+    assert lobes.rpm[i] == pytest.approx(rpm_min, abs=150)
+    assert lobes.flip[i]
+    assert lobes.chatter_hz[i] == pytest.approx(1.5 * lobes.rpm[i] * 2 / 60, rel=1e-6)  # 3 f_T / 2
+
+
+@pytest.mark.slow
+def test_time_domain_confirms_the_boundary_flip_and_hopf():
+    """3 % below the SDM limit the simulated vibration decays, 3 % above it grows, with the kind of chatter SDM says."""
+    cases = [(BENCH, None, dict(ae=1 * MM, **CUT), 18150.0, True),
+             (END_MILL_X, END_MILL_Y, dict(ae=2 * MM, teeth=3, ktc=902e6, krc=243e6, diameter=12 * MM, milling="up"),
+              21000.0, False)]
+    for mx, my, cut, rpm, flip in cases:
+        lobes = sdm_lobes(mx, my, rpm=np.array([rpm]), **cut)
+        a = lobes.a_lim[0]
+        assert bool(lobes.flip[0]) is flip
+        run = simulate_milling(mx, my, rpm=rpm, depth=np.array([0.97 * a, 1.03 * a]), duration_s=0.05, fs=10000,
+                               feed_per_tooth=0.1 * MM, contact_loss=False, **cut)
+        assert run.growth[0] < 1 < run.growth[1]
+        assert bool(run.flip[1]) is flip
+
+
+def test_finer_steps_and_more_history_nodes_move_the_multiplier_by_less_than_0_1_percent():
+    """Convergence on the end mill at a/D = 0.05, where a fixed coarse step is several % off."""
+    cut = dict(teeth=2, ktc=902e6, krc=243e6, diameter=20 * MM, ae=1 * MM, milling="down")
+    depths = np.array([1.0, 2.0, 4.0]) * MM
+    for rpm in (9000.0, 17000.0, 25000.0):
+        base, _ = sdm_growth(END_MILL_X, END_MILL_Y, rpm=rpm, depth=depths, **cut)
+        fine, _ = sdm_growth(END_MILL_X, END_MILL_Y, rpm=rpm, depth=depths, steps_per_mode=96, nodes=48, **cut)
+        assert np.max(np.abs(base / fine - 1)) < 1e-3
+
+
+def test_auto_is_sdm_and_sdm_refuses_a_frf_no_mode_reproduces():
+    f = np.arange(100.0, 3000.0, 2.0)
+    g = BENCH.frf(f)
+    args = dict(ae=1 * MM, rpm=np.arange(17000.0, 18000.0, 50.0), **CUT)
+    out = stability_lobes(f, g, np.zeros_like(g), method="auto", **args).to_dict()
+    assert out["method"] == "sdm" and set(out["instability"]) <= {"hopf", "flip"} and "flip" in out["instability"]
+    flat = np.full(f.size, -1e-7 + 0j)
+    with pytest.raises(InputError, match="no resonance peak"):
+        stability_lobes(f, flat, None, method="sdm", **args)
+    with pytest.raises(InputError, match="method must be one of"):
+        stability_lobes(f, g, None, method="mf", **args)
+
+
+def test_depth_cap_limits_what_is_reported_stable():
+    f = np.arange(100.0, 3000.0, 2.0)
+    g = BENCH.frf(f)
+    lobes = stability_lobes(f, g, np.zeros_like(g), method="sdm", depth_cap=3 * MM, ae=1 * MM,
+                            rpm=np.arange(13000.0, 16000.0, 50.0), **CUT)
+    out = lobes.to_dict()
+    assert out["depth_cap_mm"] == pytest.approx(3.0)
+    assert max(a for a in out["a_lim_mm"] if a is not None) <= 3.0
+    assert all(p["a_lim_mm"] <= 3.0 for p in out["pockets"])
