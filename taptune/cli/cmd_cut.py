@@ -14,6 +14,9 @@ import argparse
 import sys
 
 DEFAULT_MIN_RPM = 500.0
+#: The lobes are computed from half to twice the speed heard, at this many speeds.
+LOBE_SPAN = (0.5, 2.0)
+LOBE_SPEEDS = 300
 
 
 def add_parser(sub, name, help_text):
@@ -76,7 +79,7 @@ def _check(args):
 
 
 def _model_inputs(args):
-    """(entry, library, assembly, machine, frf, cut, diameter_mm, warnings): everything the lobes need, checked."""
+    """(entry, library, machine, frf, cut, diameter_mm, warnings, flute length [m] or None): what the lobes need, checked."""
     from taptune.cli.cmd_toolpoint import frequency_grid, machine_inputs, toolpoint_frfs
     from taptune.cli.cut import cut_options, tool_diameter_mm
     from taptune.library.store import HolderLibrary, default_library_path
@@ -89,12 +92,13 @@ def _model_inputs(args):
     cut = cut_options(ns)
     assembly, machine, holder, warnings = machine_inputs(ns, "cut")
     frfs, _ = toolpoint_frfs(assembly, machine, holder, frequency_grid(ns, machine), None, "distributed")
+    flutes = assembly.tool.flute_length
     diameter = cut.diameter_mm if cut.diameter_mm is not None else tool_diameter_mm(assembly)
     if cut.ae_mm > diameter * (1 + 1e-9):
         from taptune.errors import InputError
 
         raise InputError(f"--ae {cut.ae_mm:g} mm exceeds the tool diameter {diameter:g} mm")
-    return entry, library, machine, frfs[0], cut, diameter, warnings
+    return entry, library, machine, frfs[0], cut, diameter, warnings, flutes
 
 
 def run(args) -> int:
@@ -160,14 +164,17 @@ def _with_lobes(args, analysis, model, min_rpm, max_rpm, warnings) -> dict:
     from taptune.machine import stability_lobes
     from taptune.machine.next_speed import advise, observation_warnings
 
-    entry, library, machine, frf, cut, diameter, more = model
+    entry, library, machine, frf, cut, diameter, more, flutes = model
     warnings += [w for w in more if w not in warnings]
-    top = max_rpm if max_rpm is not None else max(2.0 * analysis.spindle_rpm, 1.2 * 60 * max(
-        (m.hz for m in frf.modes), default=1000.0) / cut.teeth)
-    step = max(1.0, round((top - min_rpm) / 3000))
-    rpm = uniform_grid(min_rpm, top, step)
+    # The speeds a machinist moves to after one cut: half to twice the present one, within the machine's range.
+    n = analysis.spindle_rpm
+    lo = max(min_rpm, LOBE_SPAN[0] * n)
+    hi = min(max_rpm, LOBE_SPAN[1] * n) if max_rpm is not None else LOBE_SPAN[1] * n
+    rpm = uniform_grid(lo, hi, max(1.0, round((hi - lo) / LOBE_SPEEDS)))
     lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc, krc=cut.krc,
-                            diameter=diameter * 1e-3, ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm)
+                            diameter=diameter * 1e-3, ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm,
+                            method="auto", depth_cap=flutes or float("inf"))
+    warnings += [w for w in lobes.warnings if w not in warnings]
     a_lim = np.asarray(lobes.a_lim)
     a_safe = getattr(lobes, "a_lim_safe", None)
     confidence = getattr(lobes, "confidence", None)
@@ -175,7 +182,8 @@ def _with_lobes(args, analysis, model, min_rpm, max_rpm, warnings) -> dict:
                     a_lim=a_lim if a_safe is None else np.asarray(a_safe), modes=frf.modes, holder=entry.name)
     warnings += list(advice.warnings)
     seen = list(entry.observations) + [_observation(args, analysis, cut, None)]
-    warnings += observation_warnings(seen, rpm, a_lim, a_safe, confidence)
+    warnings += [w for w in dict.fromkeys(observation_warnings(seen, rpm, a_lim, a_safe, confidence))
+                 if w not in warnings]
     summary = advice.lobes.to_dict() | {"method": getattr(lobes, "method", "zoa"), "a_crit_mm": lobes.a_crit * 1e3,
                                         "chatter_hz_tool": advice.chatter_hz,
                                         "chatter_matches_tool_mode": advice.matches_tool,

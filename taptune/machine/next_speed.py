@@ -31,8 +31,10 @@ MARGIN = 1.15
 MIN_WINDOW = 0.05
 #: A chatter frequency within this fraction (or the mode's half-power bandwidth, if wider) of a tool-point mode is that mode's.
 MODE_TOLERANCE = 0.05
-#: Chatter below this fraction of the lobes' limit is a chatter the lobes called safe; a clean cut above FAR_ABOVE × the limit, one they called chatter.
-SAFE_FRACTION = 1.0
+#: A chatter below the safe limit (with a band), or below CENTRAL_FRACTION × the central limit
+#: (without one), is a chatter the lobes called safe; a clean cut above FAR_ABOVE × the central
+#: limit, one they called chatter.
+CENTRAL_FRACTION = 0.8
 FAR_ABOVE = 1.5
 
 
@@ -142,14 +144,15 @@ def observation_warnings(observations, rpm, a_lim, a_safe=None, confidence: floa
     records (rpm, depth_mm, verdict); ``a_lim``/``a_safe`` [m] on the speed grid ``rpm``.
     """
     out = []
-    safe = a_lim if a_safe is None else a_safe
-    what = "stable" if confidence is None else f"stable with {100 * confidence:.0f} % confidence"
+    safe = CENTRAL_FRACTION * np.asarray(a_lim, float) if a_safe is None else a_safe
+    what = (f"stable with {100 * (1 - CENTRAL_FRACTION):.0f} % to spare" if a_safe is None or confidence is None
+            else f"stable with {100 * confidence:.0f} % confidence")
     for o in observations:
         depth = o.depth_mm * 1e-3
         lim, lim_safe = limit_at(rpm, a_lim, o.rpm), limit_at(rpm, safe, o.rpm)
         if not np.isfinite(lim):
             continue
-        if o.verdict == "chatter" and depth < SAFE_FRACTION * lim_safe:
+        if o.verdict == "chatter" and depth < lim_safe:
             out.append(f"chatter observed at {o.rpm:.0f} rpm and {o.depth_mm:g} mm where the lobes say {what} "
                        f"(up to {lim_safe * 1e3:.3g} mm): the model is off there")
         elif o.verdict == "stable" and depth > FAR_ABOVE * lim:
