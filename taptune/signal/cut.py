@@ -480,10 +480,10 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     if tp0 * (1 - speed_tolerance) > f_top / 2:
         raise InputError(f"--rpm {rpm:g} with --teeth {teeth}: the tooth-passing frequency {tp0:.0f} Hz lies "
                          f"above what {name} can show ({f_top:.0f} Hz)")
-    # The strongest lines anchor the chatter's family (its spacing is the tooth passing too).
-    line = (excess >= LINE_DB) & (level >= np.r_[level[1:], -np.inf]) & (level > np.r_[-np.inf, level[:-1]])
-    strong = np.flatnonzero(line)
-    anchors = f[strong[np.argsort(-level[strong])][:3]] if len(strong) else np.zeros(0)
+    # The lines of the cut; the strongest anchor the chatter's family (its spacing is the tooth passing too).
+    is_peak = (excess >= LINE_DB) & (level >= np.r_[level[1:], -np.inf]) & (level > np.r_[-np.inf, level[:-1]])
+    peaks = np.flatnonzero(is_peak)
+    anchors = f[peaks[np.argsort(-level[peaks])][:3]] if len(peaks) else np.zeros(0)
     # The harmonics alone first; a chatter that drowns them still gives the speed by its family's spacing.
     lines = _line_list(f, level, excess)
     tp, h, ex = _speed_heard(f, excess, level, lines, tp0, f_top, speed_tolerance)
@@ -522,12 +522,10 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     f_sp = tp / teeth
     tol = max(1.5 * df, 2e-3 * f_sp)
 
-    # The lines of the cut, and what each is.
-    is_peak = (excess >= LINE_DB) & (level >= np.r_[level[1:], -np.inf]) & (level > np.r_[-np.inf, level[:-1]])
-    peaks = np.flatnonzero(is_peak)
+    # What each line is.
     pf = np.array([_peak_value(f, level, i)[0] for i in peaks])
     pl = np.array([_peak_value(f, level, i)[1] for i in peaks])
-    tooth_idx, tooth_lv = _near_max(f, level, tp * h, tol)
+    _, tooth_lv = _near_max(f, level, tp * h, tol)
     tooth_ok = ex >= LINE_DB
     forced = float(np.max(np.where(tooth_ok, tooth_lv, -np.inf))) if tooth_ok.any() else float(np.max(tooth_lv))
     # Spindle harmonics (tooth passing among them) are forced; with an even tooth count the
@@ -560,8 +558,8 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
         level_db = float(pl[j] - forced)
         prominence = float(excess[peaks[j]])
         k = np.round((pf - chatter_hz) / tp)
-        fam = cand & (k != 0) & (np.abs(pf - chatter_hz - k * tp) <= tol) & (pl >= pl[j] - 30)
-        order = np.flatnonzero(fam)[np.argsort(-pl[fam])]
+        members = cand & (k != 0) & (np.abs(pf - chatter_hz - k * tp) <= tol) & (pl >= pl[j] - 30)
+        order = np.flatnonzero(members)[np.argsort(-pl[members])]
         family = tuple(float(pf[i]) for i in order)
         family_db = tuple(float(pl[i] - pl[j]) for i in order)
         if level_db >= CHATTER_DB and prominence >= CHATTER_PROMINENCE_DB:
