@@ -73,6 +73,7 @@ def main(argv=None) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--method", choices=("zoa", "sdm"), default="sdm",
                    help="the lobes the holder+machine suggestion uses (of the true tool-point FRF)")
+    p.add_argument("--dump", metavar="JSON", help="write every cut's truth and verdict")
     p.add_argument("--cache", metavar="DIR", help="keep the simulated cuts here (re-runs only listen again)")
     args = p.parse_args(argv)
     rng = np.random.default_rng(args.seed)
@@ -115,6 +116,19 @@ def main(argv=None) -> None:
                     row["lobes_ok"] = truly_stable(cfg, adv.suggested_rpm[0], depth) if adv.depth_to is None else None
                 rows.append(row)
             print(f"  {cfg['name']}: {rpm:.0f} rpm done ({time.time() - t0:.0f} s)", flush=True)
+    if args.dump:
+        import json
+
+        def plain(r):
+            a, t = r["a"], r["truth"]
+            return {"config": r["cfg"], "kind": t.kind, "truth_hz": t.chatter_hz, "truth_db": t.chatter_db,
+                    "rpm": t.rpm, "depth_mm": r.get("depth", 0) * 1e3, "verdict": r["verdict"],
+                    "chatter_hz": a and a.chatter_hz, "level_db": a and a.chatter_level_db,
+                    "family_hz": a and list(a.family_hz), "family_db": a and list(a.family_level_db),
+                    "rule_ok": r.get("rule_ok"), "lobes_ok": r.get("lobes_ok")}
+
+        with open(args.dump, "w") as fh:
+            json.dump([plain(r) for r in rows], fh, indent=1)
     clear = [r for r in rows if r["truth"].kind == "stable" or (r["truth"].chatter_db or -99) >= 10]
     right = [r for r in clear if r["verdict"] == r["truth"].kind]
     loud = [r for r in rows if r["truth"].kind == "chatter" and (r["truth"].chatter_db or -99) >= 20]
