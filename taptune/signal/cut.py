@@ -69,6 +69,8 @@ STABLE_DB = -20.0
 #: Chatter also needs a clear line: this prominence [dB] over the background.
 CHATTER_PROMINENCE_DB = 15.0
 MAINS_HZ = (50.0, 60.0)
+#: Members of the chatter's family within this many dB of its strongest line may be the chatter itself.
+FAMILY_DB = 10.0
 
 
 @dataclass(frozen=True)
@@ -167,7 +169,8 @@ def find_cut(levels, frame_s: float = FRAME_S) -> tuple[tuple[int, int], np.ndar
     """The steady cut as a frame range [i0, i1), a mask of idle frames, and whether the cut stood out.
 
     Frames above the midpoint between the quiet (10th percentile) and loud (95th) levels,
-    or 10 dB above the quiet level if that is lower, are cutting; gaps of up to 0.15 s are closed (a chip, an interrupted tooth). The
+    or 10 dB above the quiet level if that is lower (6 dB if that leaves too short a cut),
+    are cutting; gaps of up to 0.15 s are closed (a chip, an interrupted tooth). The
     longest run less :data:`TRIM_FRACTION` at each end is the steady cut. Frames below a
     quarter of the way up, at least 0.25 s away from the cut, are idle. Without that
     contrast the whole recording is taken as cut (trimmed the same way) and nothing is idle.
@@ -177,18 +180,21 @@ def find_cut(levels, frame_s: float = FRAME_S) -> tuple[tuple[int, int], np.ndar
     if hi - lo < CUT_CONTRAST_DB:
         trim = int(TRIM_FRACTION / 2 * n)
         return (trim, n - trim), np.zeros(n, bool), False
-    # At most 10 dB above the quiet level: a chatter that grows late in the cut is much
-    # louder than its stable start, which is still cutting.
-    loud = levels > lo + min(0.5 * (hi - lo), 10.0)
     gap = int(round(0.15 / frame_s))
-    # Close short gaps in the loud mask.
-    idx = np.flatnonzero(loud)
-    for a, b in zip(idx[:-1], idx[1:]):
-        if 1 < b - a <= gap + 1:
-            loud[a:b] = True
-    edges = np.diff(np.concatenate([[0], loud.astype(int), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    j = int(np.argmax(ends - starts))
+    # At most 10 dB above the quiet level: a chatter that grows late in the cut is much
+    # louder than its stable start, which is still cutting; if the loud part is still too
+    # short to analyse, 6 dB.
+    for rise in (min(0.5 * (hi - lo), 10.0), CUT_CONTRAST_DB):
+        loud = levels > lo + rise
+        idx = np.flatnonzero(loud)
+        for a, b in zip(idx[:-1], idx[1:]):  # close short gaps (a chip, an interrupted tooth)
+            if 1 < b - a <= gap + 1:
+                loud[a:b] = True
+        edges = np.diff(np.concatenate([[0], loud.astype(int), [0]]))
+        starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+        j = int(np.argmax(ends - starts))
+        if (ends[j] - starts[j]) * (1 - 2 * TRIM_FRACTION) * frame_s >= MIN_CUT_S:
+            break
     s, e = int(starts[j]), int(ends[j])
     trim = int(round(TRIM_FRACTION * (e - s)))
     quiet = levels < lo + 0.25 * (hi - lo)
@@ -554,9 +560,18 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
     verdict = "stable"
     if cand.any():
         j = np.flatnonzero(cand)[np.argmax(pl[cand])]
+        # The tooth passing aliases the chatter into f_c + k f_tp, and sound weighs the higher
+        # members up (it follows the surfaces' velocity, not their displacement): of the
+        # members within FAMILY_DB of the strongest, the one strongest in displacement
+        # (level − 20 log10 f) is the chatter.
+        k = np.round((pf - pf[j]) / tp)
+        near = cand & (np.abs(pf - pf[j] - k * tp) <= tol) & (pl >= pl[j] - FAMILY_DB)
+        i = np.flatnonzero(near)
+        strongest, j = j, int(i[np.argmax(pl[i] - 20 * np.log10(pf[i]))])
         chatter_hz = float(pf[j])
-        level_db = float(pl[j] - forced)
-        prominence = float(excess[peaks[j]])
+        # The verdict and the level go by the loudest line of the chatter.
+        level_db = float(pl[strongest] - forced)
+        prominence = float(excess[peaks[strongest]])
         k = np.round((pf - chatter_hz) / tp)
         members = cand & (k != 0) & (np.abs(pf - chatter_hz - k * tp) <= tol) & (pl >= pl[j] - 30)
         order = np.flatnonzero(members)[np.argsort(-pl[members])]
