@@ -41,7 +41,7 @@ def simulated_verdict(cfg, scale: float, rpm: float, depth: float) -> str:
     mx, my = cfg["mx"].scaled(freq_factor=scale), cfg["my"].scaled(freq_factor=scale)
     run = simulate_milling(mx, my, teeth=cfg["teeth"], ktc=KTC, krc=KRC, diameter=cfg["diameter"], ae=cfg["ae"],
                            milling=cfg["milling"], rpm=rpm, depth=[depth], duration_s=0.3, fs=4000,
-                           feed_per_tooth=0.06e-3, steps=40, rng=np.random.default_rng(1), contact_loss=False)
+                           feed_per_tooth=0.0, steps=40, rng=np.random.default_rng(1), contact_loss=False)
     return "chatter" if float(np.atleast_1d(run.growth)[0]) > 1.0 else "stable"
 
 

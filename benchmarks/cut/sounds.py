@@ -204,8 +204,9 @@ def simulate_batch(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diam
                   depth=list(depths), fs=FS, feed_per_tooth=feed_per_tooth, steps=steps)
     run = simulate_milling(modes_x, modes_y, duration_s=seconds, rng=np.random.default_rng(seed), contact_loss=True,
                            **common)
+    # Without feed: the free vibration alone gives the multiplier (module bench_cut.truly_stable).
     linear = simulate_milling(modes_x, modes_y, duration_s=0.4, rng=np.random.default_rng(seed + 1),
-                              contact_loss=False, **common)
+                              contact_loss=False, **(common | {"feed_per_tooth": 0.0}))
     x, y = np.atleast_2d(run.x_m), np.atleast_2d(run.y_m)
     fx, fy = np.atleast_2d(run.fx_n), np.atleast_2d(run.fy_n)
     return {"rpm": rpm, "teeth": teeth, "depths": list(depths), "vibration": x + 0.7 * y, "force": fx + 0.5 * fy,

@@ -69,7 +69,7 @@ STABLE_DB = -20.0
 #: Chatter also needs a clear line: this prominence [dB] over the background.
 CHATTER_PROMINENCE_DB = 15.0
 MAINS_HZ = (50.0, 60.0)
-#: Members of the chatter's family within this many dB of its strongest line may be the chatter itself.
+#: The chatter's next family members within this many dB of its strongest line may be the chatter itself.
 FAMILY_DB = 10.0
 
 
@@ -562,10 +562,10 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
         j = np.flatnonzero(cand)[np.argmax(pl[cand])]
         # The tooth passing aliases the chatter into f_c + k f_tp, and sound weighs the higher
         # members up (it follows the surfaces' velocity, not their displacement): of the
-        # members within FAMILY_DB of the strongest, the one strongest in displacement
-        # (level − 20 log10 f) is the chatter.
+        # strongest line and its next members (k = ±1) within FAMILY_DB of it, the one
+        # strongest in displacement (level − 20 log10 f) is the chatter.
         k = np.round((pf - pf[j]) / tp)
-        near = cand & (np.abs(pf - pf[j] - k * tp) <= tol) & (pl >= pl[j] - FAMILY_DB)
+        near = cand & (np.abs(k) <= 1) & (np.abs(pf - pf[j] - k * tp) <= tol) & (pl >= pl[j] - FAMILY_DB)
         i = np.flatnonzero(near)
         strongest, j = j, int(i[np.argmax(pl[i] - 20 * np.log10(pf[i]))])
         chatter_hz = float(pf[j])
