@@ -378,13 +378,14 @@ def test_machine_batch_fills_the_summary_with_the_critical_depth_and_the_best_po
         machine = doc["machine"]
         assert machine["a_crit_mm"] == pytest.approx(a_crit, rel=1e-3)
         assert machine["cut"]["diameter_mm"] == 16.0  # the tool's flute diameter from the assembly
-        assert machine["pockets"][0]["rpm"] == pytest.approx(rpm, abs=0.5)
+        # The summary's best pocket is the best safe pocket (a speed window a machinist can hold).
+        assert machine["safe_pockets"][0]["rpm"] == pytest.approx(rpm, abs=0.5) and machine["method"] in ("sdm", "zoa")
         assert len(machine["pockets"]) <= 10 and "a_lim_mm" not in machine  # moderate JSON: the curve is in the CSV
         lines = (out / machine["lobes_csv"]).read_text().splitlines()
-        assert lines[0] == "rpm,a_lim_mm,chatter_hz"
+        assert lines[0] == "rpm,a_lim_mm,a_lim_mm_safe,chatter_hz,instability"
         a_lim = [float(line.split(",")[1]) for line in lines[1:] if line.split(",")[1]]
         assert min(a_lim) == pytest.approx(a_crit, rel=1e-3)  # the critical depth is the lowest limit
-        assert max(a_lim) == pytest.approx(a_best, rel=1e-3)  # the best pocket is the highest peak
+        assert max(a_lim) >= a_best * (1 - 1e-9)  # the safe pocket lies under the highest peak
         # The tool point on the spindle is softer than nothing: its strongest mode is a real peak.
         assert machine["modes"][0]["magnitude_um_per_n"] > 0.05 and 500 < machine["modes"][0]["hz"] < 15000
 
@@ -424,7 +425,9 @@ def test_a_rerun_on_the_same_machine_skips_and_keeps_the_machine_numbers(machine
     other_cut = run_batch([folder / "one.wav"], BatchOptions(out_dir=out, save=False, jobs=1,
                                                             machine=machine_setup_for_tests(ae=2.0), **TINY))
     (row,) = other_cut.rows
-    assert row.status == "skipped" and row.a_crit_mm is None and "machine part not run" in row.message
+    # Another cut: the lobes are computed now from the parameters identified before, and stored.
+    assert row.status == "skipped" and row.a_crit_mm is not None and "machine part computed now" in row.message
+    assert json.loads((out / "one.json").read_text())["machine"]["cut"]["ae_mm"] == 2.0
 
 
 def test_a_fit_that_does_not_describe_its_recording_is_a_failed_row_and_not_stored(tmp_path):

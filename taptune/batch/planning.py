@@ -122,7 +122,7 @@ def _skip_from_json(item: Item, group_hashes: frozenset[str], machine=None) -> R
         return None
     row = Row(str(item.path), item.holder, "skipped", measured, model, objective, None,
               f"identified before (same sha256 {item.sha256[:12]}; {item.json_path.name})")
-    return skipped_note(row, data, machine, item.assembly)
+    return skipped_note(row, data, machine, item.assembly, item.json_path)
 
 
 def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str], machine=None) -> Row | None:
@@ -146,7 +146,7 @@ def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str], 
             row = Row(str(item.path), item.holder, "skipped", first_three(record.bending_measured_hz),
                       first_three(record.bending_model_hz), record.objective, None,
                       f"identified before (same sha256 {item.sha256[:12]} in the library, {record.date})")
-            return skipped_note(row, None, machine, item.assembly)
+            return skipped_note(row, None, machine, item.assembly, item.json_path, entry.params)
     return None
 
 

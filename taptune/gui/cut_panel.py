@@ -156,21 +156,24 @@ class CutPanel(QWidget):
             show_error(self, "Cannot hear a cut here", str(err))
             return False
         result = self.view.result
+        refined = getattr(self.view, "refined_result", None)
         min_rpm, max_rpm = cut.rpm_min, cut.rpm_max
         if result is not None:
-            _, frf, lobes = result
-            a = getattr(lobes, "a_lim_safe", None)
+            rpm, a_lim = result[2].rpm, result[2].a_lim
+            if refined is not None:  # the semi-discretization, and its safe limit when there is a band
+                _, _, lobes, band = refined
+                rpm, a_lim = (band.rpm, band.a_safe) if getattr(band, "samples", 0) > 1 else (lobes.rpm, lobes.a_lim)
             advice = advise(analysis, min_rpm=min_rpm, max_rpm=max_rpm, depth=self.depth.value() * 1e-3,
-                            rpm=lobes.rpm, a_lim=lobes.a_lim if a is None else a, modes=frf.modes,
-                            holder=self.view.source.assembly.holder.name)
+                            rpm=rpm, a_lim=a_lim, modes=result[1].modes, holder=self.view.source.assembly.holder.name)
         else:
             advice = advise(analysis, min_rpm=min_rpm, max_rpm=max_rpm)
         self.analysis, self.advice = analysis, advice
         self._keep(recording, analysis, cut)
         self._seen = None
         self.result.setText(verdict_html(analysis, advice))
-        if result is not None:
-            self.view.draw(*result)
+        if result is not None and len(self.view.canvas.figure.axes) > 1:
+            self.mark(self.view.canvas.figure.axes[1])
+            self.view.canvas.draw_idle()
         return True
 
     def _keep(self, recording, analysis, cut) -> None:

@@ -1,10 +1,14 @@
 """Machine view: the holder on a machine — tool-point FRF in x and y and the stability lobes, at any stick-out.
 
 The holder parameters are the predictor's (identified now or from the library), with the
-panel's tool; the machine is a machine file (MACHINE.md) chosen once and remembered. Each
-update calls :func:`taptune.machine.toolpoint_frf` and :func:`taptune.machine.stability_lobes`
-— what ``taptune toolpoint`` and ``taptune lobes`` call — in a worker thread; while one runs
-only the latest request waits (:class:`~taptune.gui.latest.LatestOnly`).
+panel's tool; the machine is a machine file (docs/machine.md) chosen once and remembered. Each
+update calls :func:`taptune.machine.toolpoint_frf` and the zero-order
+:func:`taptune.machine.stability_lobes` — a preview fast enough to follow the slider — in
+a worker thread; while one runs only the latest request waits
+(:class:`~taptune.gui.latest.LatestOnly`). When a preview is shown, a second worker
+computes what ``taptune lobes`` reports — the semi-discretization, the holder's band,
+the safe pockets (:func:`taptune.machine.band.lobes_with_band`) — and draws it over the
+preview as soon as it is ready, if the stick-out and the cut have not changed meanwhile.
 """
 
 from __future__ import annotations
@@ -88,8 +92,32 @@ def compute_machine(source, machine, stickout_mm: float, cut: Cut, freq_hz=None)
     frf = toolpoint_frf(assembly, source.param_sets[0], {"x": machine.x, "y": machine.y}, freq, source.model_options)
     lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
                             krc=cut.krc_mpa * 1e6, diameter=cut.diameter_mm * MM, ae=cut.ae_mm * MM,
-                            milling=cut.milling, rpm=frequency_grid(cut.rpm_min, cut.rpm_max, RPM_STEP))
+                            milling=cut.milling, rpm=frequency_grid(cut.rpm_min, cut.rpm_max, RPM_STEP),
+                            method="zoa", depth_cap=depth_cap(assembly))
     return stickout_mm, frf, lobes
+
+
+def depth_cap(assembly) -> float:
+    """The tool's flute length [m] (inf when the assembly does not give it)."""
+    flute = assembly.tool.flute_length
+    return flute if flute is not None else float("inf")
+
+
+def compute_refined(source, stickout_mm: float, frf, cut: Cut, confidence: float = 0.9):
+    """``(stickout_mm, cut, Lobes, LobeBand)``: the semi-discretization lobes of ``frf`` with the
+    holder's prediction band (its near-optimal sets, the geometry tolerances, the model form) (worker)."""
+    from taptune.identify.core import predict
+    from taptune.library.exchange import frequency_grid
+    from taptune.machine.band import band_from_prediction, lobes_with_band
+
+    assembly = source.assembly.with_stickout(stickout_mm * MM)
+    band = band_from_prediction(predict(list(source.param_sets), assembly, source.model_options))
+    lobes, lobe_band = lobes_with_band(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
+                                       krc=cut.krc_mpa * 1e6, diameter=cut.diameter_mm * MM, ae=cut.ae_mm * MM,
+                                       milling=cut.milling, rpm=frequency_grid(cut.rpm_min, cut.rpm_max, RPM_STEP),
+                                       method="auto", confidence=confidence, band=band,
+                                       depth_cap=depth_cap(assembly))
+    return stickout_mm, cut, lobes, lobe_band
 
 
 def tool_teeth(name: str) -> int | None:
@@ -119,12 +147,15 @@ class MachineView(QWidget):
     Signals
     -------
     updated(object)
-        ``(stickout_mm, ToolpointFRF, Lobes)`` just drawn.
+        ``(stickout_mm, ToolpointFRF, Lobes)`` just drawn (the zero-order preview).
+    refined(object)
+        ``(stickout_mm, Cut, Lobes, LobeBand)`` just drawn over the preview.
     failed(str)
         An update could not be computed (the message is also shown in the view).
     """
 
     updated = Signal(object)
+    refined = Signal(object)
     failed = Signal(str)
 
     def __init__(self, settings=None, parent=None):
@@ -139,6 +170,8 @@ class MachineView(QWidget):
         self.result = None
         self._artists = None  # the plot's axes and lines, made on the first draw
         self._updates = LatestOnly(self._show, self._failed, self)
+        self._refines = LatestOnly(self._show_refined, self._refine_failed, self)
+        self.refined_result = None
 
         self.machine_label = QLabel()
         self.machine_label.setWordWrap(True)
@@ -333,6 +366,11 @@ class MachineView(QWidget):
     def busy(self) -> bool:
         return self._updates.busy
 
+    @property
+    def refining(self) -> bool:
+        """True while the semi-discretization and the band of the preview are computed."""
+        return self._refines.busy
+
     def request(self, *_args) -> None:
         """Compute the FRF and lobes at the current stick-out and cut (latest request wins)."""
         if self.machine is not None and self.source is not None:
@@ -347,10 +385,27 @@ class MachineView(QWidget):
 
     def _show(self, result) -> None:
         self.result = result
+        self.refined_result = None
         stickout_mm, frf, lobes = result
-        self.summary.setText(summary_text(self.source, frf, lobes))
+        self.summary.setText(summary_text(self.source, frf, lobes) + " <i>Semi-discretization and band follow…</i>")
         self.draw(stickout_mm, frf, lobes)
         emit(self.updated, result)
+        self._refines.request(compute_refined, self.source, stickout_mm, frf, self.cut())
+
+    def _show_refined(self, result) -> None:
+        stickout_mm, cut, lobes, band = result
+        if self.result is None or abs(stickout_mm - self.spin.value()) > 1e-9 or cut != self.cut():
+            return  # overtaken: a newer preview asks for its own
+        self.refined_result = result
+        self.summary.setText(refined_text(self.source, self.result[1], lobes, band))
+        self.draw_refined(lobes, band)
+        emit(self.refined, result)
+
+    def _refine_failed(self, message: str) -> None:
+        if self.result is not None:
+            self.summary.setText(self.summary.text().replace(" <i>Semi-discretization and band follow…</i>", "")
+                                 + f" <span style='color:#b00020'>No semi-discretization here: "
+                                   f"{html.escape(message, quote=False)}</span>")
 
     def draw(self, stickout_mm: float, frf, lobes) -> None:
         """The FRF (left) and the lobe diagram (right).
@@ -380,23 +435,67 @@ class MachineView(QWidget):
         if art["stable"] is not None:
             art["stable"].remove()
         art["stable"] = ax_l.fill_between(lobes.rpm, 0, a_mm, color=STABLE, lw=0, zorder=0)
+        for key in ("band",):
+            if art[key] is not None:
+                art[key].remove()
+                art[key] = None
+        art["safe"].set_data([], [])
         art["boundary"].set_data(lobes.rpm, a_mm)
+        cap = lobes.depth_cap / MM
+        art["cap"].set_visible(bool(np.isfinite(cap)))
+        if np.isfinite(cap):
+            art["cap"].set_ydata([cap, cap])
+        ax_l.set_title("Stability lobes: zero-order preview (semi-discretization follows)", loc="left")
         a_crit = lobes.a_crit / MM
-        art["crit"].set_ydata([a_crit, a_crit])
-        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit:.2g} mm")
         best = lobes.pockets[0] if lobes.pockets else None
-        art["pocket"].set_visible(best is not None)
-        art["pocket_note"].set_visible(best is not None)
-        if best is not None:
-            rpm, a = best[0], best[1] / MM
-            art["pocket"].set_data([rpm], [a])
-            art["pocket_note"].xy = (rpm, a)
-            art["pocket_note"].set_text(f"{rpm:,.0f} rpm\n{a:.2g} mm")
+        self._mark(a_crit, None if best is None else (best[0], best[1] / MM, f"{best[0]:,.0f} rpm\n{best[1] / MM:.2g} mm"))
         top = max(a / MM for _, a in lobes.pockets) if lobes.pockets else 4 * a_crit
-        ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit))
+        ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit, 1.1 * cap if np.isfinite(cap) else np.inf))
         ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
         self.cut_panel.mark(ax_l)  # the observed cuts, ✓ / ✗
         self.canvas.draw_idle()
+
+    def draw_refined(self, lobes, band) -> None:
+        """The semi-discretization boundary, the shaded band, the safe depth and the best safe pocket over the preview."""
+        art = self._artists
+        if art is None:
+            return
+        ax_l = art["ax_l"]
+        cap = lobes.depth_cap
+        capped = np.minimum(lobes.a_lim, cap)  # stable up to the flute length: the cap, not a gap
+        a_mm = np.where(np.isfinite(capped), capped / MM, np.nan)
+        if art["stable"] is not None:
+            art["stable"].remove()
+        art["stable"] = ax_l.fill_between(lobes.rpm, 0, a_mm, color=STABLE, lw=0, zorder=0)
+        if art["band"] is not None:
+            art["band"].remove()
+            art["band"] = None
+        if band.samples > 1:
+            art["band"] = ax_l.fill_between(band.rpm, band.a_low / MM, band.a_high / MM, color="#f5c16c", alpha=0.5,
+                                            lw=0, zorder=0.5)
+            art["safe"].set_data(band.rpm, band.a_safe / MM)
+        art["boundary"].set_data(lobes.rpm, a_mm)
+        best = band.safe_pockets[0] if band.safe_pockets else None
+        self._mark(min(lobes.a_crit, cap) / MM, None if best is None else (
+            best.rpm, best.a / MM, f"{best.rpm_low:,.0f}–{best.rpm_high:,.0f} rpm\n{best.a / MM:.2g} mm "
+                                   f"({100 * band.confidence:.0f} %)"))
+        kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
+        ax_l.set_title(f"Stability lobes ({kind}): stable below the line", loc="left")
+        self.cut_panel.mark(ax_l)
+        self.canvas.draw_idle()
+
+    def _mark(self, a_crit_mm: float, best) -> None:
+        """The critical-depth line and the best pocket ``(rpm, a [mm], label)`` (None: no marker)."""
+        art = self._artists
+        art["crit"].set_ydata([a_crit_mm, a_crit_mm])
+        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit_mm:.2g} mm")
+        art["pocket"].set_visible(best is not None)
+        art["pocket_note"].set_visible(best is not None)
+        if best is not None:
+            rpm, a, text = best
+            art["pocket"].set_data([rpm], [a])
+            art["pocket_note"].xy = (rpm, a)
+            art["pocket_note"].set_text(text)
 
     def _make_axes(self) -> None:
         fig = self.canvas.figure
@@ -414,17 +513,20 @@ class MachineView(QWidget):
             boundary, = ax_l.plot([], [], color=MEASURED, lw=1.0, label="stability limit")
             crit = ax_l.axhline(0.0, color=MODEL, lw=0.9, ls="--", label="stable at any speed")
             pocket, = ax_l.plot([], [], "v", color=MODEL, ms=7)
+            safe, = ax_l.plot([], [], color="#2c3e50", lw=0.9, ls="--", label="safe depth (band)")
+            cap = ax_l.axhline(0.0, color="#7f8c8d", lw=1.0, ls=":", label="flute length")
             pocket_note = ax_l.annotate("", (0, 0), xytext=(0, 8), textcoords="offset points", ha="center",
                                         va="bottom", fontsize=8, color=MODEL)
             ax_l.set_xlabel("spindle speed [rpm]")
             ax_l.set_ylabel("axial depth of cut [mm]")
-            ax_l.set_title("Stability lobes (zero-order): stable below the line", loc="left")
             legend = ax_l.legend(loc="upper left", framealpha=0.9)
         self._artists = dict(ax_f=ax_f, ax_l=ax_l, x=x, y=y, mode=mode, boundary=boundary, crit=crit,
-                             pocket=pocket, pocket_note=pocket_note, legend=legend, stable=None)
+                             pocket=pocket, pocket_note=pocket_note, legend=legend, stable=None, band=None,
+                             safe=safe, cap=cap)
 
     def shutdown(self) -> None:
         self._updates.shutdown()
+        self._refines.shutdown()
 
 
 def summary_text(source, frf, lobes) -> str:
@@ -438,3 +540,15 @@ def summary_text(source, frf, lobes) -> str:
             f"(holder parameters: {source.label}). "
             f"<b>Stable at every speed up to {a_crit:.2g} mm</b>; best speeds: {pockets or 'none in this range'}"
             f"{limit}.")
+
+
+def refined_text(source, frf, lobes, band) -> str:
+    """The summary once the semi-discretization and the band are in: safe pockets first."""
+    cap = lobes.depth_cap
+    a_crit = min(lobes.a_crit, cap) / MM
+    pockets = ", ".join(f"{p.rpm_low:,.0f}–{p.rpm_high:,.0f} rpm → {p.a / MM:.2g} mm" for p in band.safe_pockets[:3])
+    kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
+    return (f"<b>{source.assembly.holder.name}</b> with {source.assembly.tool.name} "
+            f"(holder parameters: {source.label}). <b>Safe pockets ({100 * band.confidence:.0f} %): "
+            f"{pockets or 'none in this range'}</b>; stable at every speed up to {a_crit:.2g} mm ({kind}). "
+            f"<span style='color:#555555'>Band: {html.escape(band.sources, quote=False)}.</span>")

@@ -14,7 +14,9 @@ files lives in :mod:`taptune.machine`.
 * :func:`read_frf` — one translational FRF w/f (dummy-holder measurements): CSV
   ``f_hz,re,im``, CutPro-style ``.frf`` text or UFF58.
 * :func:`read_toolpoint_csv` / :func:`write_toolpoint_csv` — the tool-point FRF
-  ``f_hz,xx_re,xx_im,yy_re,yy_im`` that ``taptune lobes --frf`` reads.
+  ``f_hz,xx_re,xx_im,yy_re,yy_im`` that ``taptune lobes --frf`` reads;
+  :func:`read_toolpoint` — that CSV, or one FRF file per direction in any format of
+  :func:`read_frf` (``lobes --frf X --frf-y Y``).
 
 Interpolation onto another grid (:meth:`SpindleReceptance.at`, :meth:`Frf.at`,
 :meth:`ToolpointFrf.at`) is linear in re and im and never extrapolates: a band the file
@@ -374,26 +376,51 @@ def read_frf(path) -> Frf:
     if suffix == ".frf":
         return _read_frf_text(path)
     c = read_csv_columns(path, FRF_COLUMNS, "an FRF file")
-    f = check_frequency_axis(path, c["f_hz"], c["_lines"])
-    return Frf(f, check_receptance(path, "w/f", "translational", f, c["re"] + 1j * c["im"], c["_lines"]), str(path))
+    data, lines = drop_static_row(np.column_stack([c["f_hz"], c["re"], c["im"]]), c["_lines"])
+    f = check_frequency_axis(path, data[:, 0], lines)
+    return Frf(f, check_receptance(path, "w/f", "translational", f, data[:, 1] + 1j * data[:, 2], lines), str(path))
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _read_frf_text(path) -> Frf:
-    """CutPro-style text: frequency, real, imaginary per line (tabs or spaces), ``#``/``%`` comments."""
+    """CutPro-style text: frequency, real, imaginary per line (tabs or spaces), ``#``/``%`` comments.
+
+    As CutPro and its peers write it, the first row may carry the column names after its
+    three numbers (``0 2.04e-07 0 Freq Hz Real m/N Imag m/N``); a static (0 Hz) first row
+    is dropped (:func:`drop_static_row`).
+    """
     rows, linenos = [], []
     for lineno, line in _data_lines(read_text(path, "an FRF file", "text (frequency, real, imaginary)")):
         if line.startswith("%"):
             continue
         cells = line.replace(",", " ").split()
+        if not rows and len(cells) > 3 and all(_is_number(c) for c in cells[:3]) \
+                and not any(_is_number(c) for c in cells[3:]):
+            cells = cells[:3]  # header words after the first row's numbers
         if len(cells) != 3:
             raise InputError(f"{path}: line {lineno} has {len(cells)} values, expected frequency, real, imaginary")
         rows.append([_float(path, lineno, name, v) for name, v in zip(("frequency", "real", "imaginary"), cells)])
         linenos.append(lineno)
     if not rows:
         raise InputError(f"{path}: holds no data (expected lines of frequency, real, imaginary)")
-    data = np.array(rows)
+    data, linenos = drop_static_row(np.array(rows), linenos)
     f = check_frequency_axis(path, data[:, 0], linenos)
     return Frf(f, check_receptance(path, "w/f", "translational", f, data[:, 1] + 1j * data[:, 2], linenos), str(path))
+
+
+def drop_static_row(data: np.ndarray, linenos):
+    """``data`` (rows of frequency, values…) without a first row at exactly 0 Hz, the static
+    value many FRF programs write first; the FRF is used at positive frequencies only."""
+    if len(data) > 1 and data[0, 0] == 0.0:
+        return data[1:], list(linenos)[1:]
+    return data, list(linenos)
 
 
 # --------------------------------------------------------------------------- tool-point FRF
@@ -417,6 +444,8 @@ def check_direct_frf(path, name: str, h: np.ndarray) -> np.ndarray:
 def read_toolpoint_csv(path) -> ToolpointFrf:
     """Tool-point FRFs from CSV ``f_hz,xx_re,xx_im[,yy_re,yy_im]`` (y = x when yy is absent)."""
     c = read_csv_columns(path, TOOLPOINT_COLUMNS[:3], "a tool-point FRF file", optional=TOOLPOINT_COLUMNS[3:])
+    if c["f_hz"].size > 1 and c["f_hz"][0] == 0.0:  # the static row (drop_static_row)
+        c = {k: v[1:] for k, v in c.items()}
     f = check_frequency_axis(path, c["f_hz"], c["_lines"])
     xx = check_receptance(path, "xx", "translational", f, c["xx_re"] + 1j * c["xx_im"], c["_lines"])
     has_y = [k in c for k in TOOLPOINT_COLUMNS[3:]]
@@ -426,6 +455,41 @@ def read_toolpoint_csv(path) -> ToolpointFrf:
     check_direct_frf(path, "xx", xx)
     check_direct_frf(path, "yy", yy)
     return ToolpointFrf(f, xx, yy, str(path), y_from_x=not all(has_y))
+
+
+def read_toolpoint(path_x, path_y=None) -> ToolpointFrf:
+    """The tool-point FRFs from one file per direction, or one tool-point CSV with both.
+
+    ``path_x``: a tool-point CSV (``f_hz,xx_re,xx_im[,yy_re,yy_im]``, :func:`read_toolpoint_csv`)
+    or one direct FRF as :func:`read_frf` reads it (CSV ``f_hz,re,im``, CutPro-style
+    ``.frf``, UFF58). ``path_y``: the y FRF in any of the one-FRF formats, interpolated onto
+    x's frequencies (it must cover them); without it y = x. Both must follow the sign
+    convention of :func:`check_direct_frf` (e^{iωt}: Im ≤ 0 below resonance).
+    """
+    suffix = Path(path_x).suffix.lower()
+    header = ""
+    if suffix not in UFF_SUFFIXES and suffix != ".frf":
+        lines = list(_data_lines(read_text(path_x, "a tool-point FRF file", "CSV")))
+        header = lines[0][1].lower() if lines else ""
+    if "xx_re" in header:
+        t = read_toolpoint_csv(path_x)
+        if path_y is not None:
+            if not t.y_from_x:
+                raise InputError(f"{path_y}: {path_x} already holds the yy columns; give the y FRF in one place")
+            return _with_y(t, path_y)
+        return t
+    g = read_frf(path_x)
+    xx = check_direct_frf(path_x, "the FRF", g.h)
+    t = ToolpointFrf(g.freq_hz, xx, xx, str(path_x), y_from_x=True)
+    return _with_y(t, path_y) if path_y is not None else t
+
+
+def _with_y(t: ToolpointFrf, path_y) -> ToolpointFrf:
+    if Path(path_y).resolve() == Path(t.source).resolve():
+        raise InputError(f"{path_y}: is the x FRF's file too; leave --frf-y out for y = x")
+    gy = read_frf(path_y)
+    yy = check_direct_frf(path_y, "the FRF", gy.at(t.freq_hz))
+    return ToolpointFrf(t.freq_hz, t.xx, yy, f"{t.source} (x), {path_y} (y)", y_from_x=False)
 
 
 def write_toolpoint_csv(path, freq_hz, xx, yy, comments=()) -> None:

@@ -18,7 +18,11 @@ Public API (signatures in each module's docstring; SI inside: m, Hz, N/m², m/N)
                        smooth="auto", source="dummy", return_fit=False)
         -> (SpindleReceptance, warnings[, DummyFit])                   # dummy.py
     stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth, ktc, krc, diameter, ae,
-                    milling="up"|"down", rpm, refine=8) -> Lobes       # lobes.py
+                    milling="up"|"down", rpm, refine=8, method="zoa"|"sdm"|"auto",
+                    depth_cap=inf, modes=None) -> Lobes                # lobes.py
+    sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap=inf)  # sdm.py
+    lobes_with_band(freq_hz, phi_xx, phi_yy, *, ..., method, confidence, band, depth_cap)
+        -> (Lobes, LobeBand)                                           # band.py
     MATERIALS: dict[str, CuttingCoefficients]; cutting_coefficients(name)   # materials.py
     dominant_modes(freq_hz, frf, direction) -> list[FRFMode]          # peaks.py
     fit_frfs(freq_hz, frfs) -> RationalFit                            # vectfit.py
@@ -57,6 +61,9 @@ _EXPORTS = {
     "cutting_coefficients": "materials",
     "fit_frfs": "vectfit",
     "RationalFit": "vectfit",
+    "sdm_lobes": "sdm",
+    "lobes_with_band": "band",
+    "LobeBand": "band",
     "ModalSet": "simulate",
     "ModalFit": "simulate",
     "modal_fit": "simulate",

@@ -1,4 +1,10 @@
-"""Milling stability lobes, zero-order approximation (MODEL.md §11; Altintas & Budak 1995).
+"""Milling stability lobes: the zero-order approximation here, and the entry point for all methods.
+
+:func:`stability_lobes` (``method="zoa"|"sdm"|"auto"``) returns :class:`Lobes` from either the
+zero-order lobes below or the semi-discretization of :mod:`taptune.machine.sdm` on modes
+fitted to the FRFs (:func:`fit_modes`), with a depth cap (the flute length).
+
+Zero-order approximation (Altintas & Budak 1995).
 
 For each chatter-frequency candidate ω_c the characteristic equation
 a0 Λ² + a1 Λ + 1 = 0 with
@@ -31,8 +37,10 @@ less than 0.2 %.
 Signatures::
 
     directional_factors(ae, diameter, milling, kr) -> (axx, axy, ayx, ayy)
+    zoa_lobes(freq_hz, phi_xx, phi_yy, *, teeth, ktc, krc, diameter, ae, milling, rpm, refine=8) -> Lobes
     stability_lobes(freq_hz, phi_xx, phi_yy, *, teeth, ktc, krc, diameter, ae, milling, rpm,
-                    refine=8) -> Lobes
+                    refine=8, method="zoa", depth_cap=inf, modes=None) -> Lobes
+    fit_modes(freq_hz, phi_xx, phi_yy) -> (ModalSet x, ModalSet y or None, notes)
 """
 
 from __future__ import annotations
@@ -43,6 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
+from taptune.machine.engagement import MILLING, engagement_angles  # noqa: F401 (engagement_angles is public here)
 from taptune.machine.peaks import dominant_modes
 
 MM = 1e-3
@@ -50,32 +59,10 @@ MM = 1e-3
 MIN_FREQUENCIES = 4
 #: Half-power bandwidths on each side of a dominant peak where the scan is refined.
 REFINE_BANDS = 6.0
-MILLING = ("up", "down")
 #: First pass of the envelope: segments with a limit below this many critical depths.
 LOW_SEGMENTS = 4.0
 #: Lobes × segments handled at once by the envelope (bounds its temporary arrays).
 BLOCK_ELEMENTS = 500_000
-
-
-def engagement_angles(ae: float, diameter: float, milling: str) -> tuple[float, float]:
-    """Entry and exit angles φ_st, φ_ex [rad], measured from the y axis, feed along x.
-
-    ``ae`` ≥ ``diameter`` (to 1e-9 relative) is slotting, 0 → π; up-milling
-    0 → arccos(1 − 2a_e/D); down-milling arccos(2a_e/D − 1) → π.
-    """
-    if milling not in MILLING:
-        raise InputError(f"milling must be 'up' or 'down', got {milling!r}")
-    if not (diameter > 0 and np.isfinite(diameter)):
-        raise InputError(f"the tool diameter must be > 0 mm, got {diameter / MM:g}")
-    if not (ae > 0 and np.isfinite(ae)):
-        raise InputError(f"the radial depth ae must be > 0 mm, got {ae / MM:g}")
-    if ae > diameter * (1 + 1e-9):
-        raise InputError(f"the radial depth ae ({ae / MM:g} mm) exceeds the tool diameter ({diameter / MM:g} mm)")
-    if ae >= diameter * (1 - 1e-9):
-        return 0.0, np.pi
-    if milling == "up":
-        return 0.0, float(np.arccos(1 - 2 * ae / diameter))
-    return float(np.arccos(2 * ae / diameter - 1)), np.pi
 
 
 def directional_factors(ae: float, diameter: float, milling: str, kr: float) -> tuple[float, float, float, float]:
@@ -129,6 +116,20 @@ class Lobes:
     depth_cap: float = float("inf")
     modes: tuple = field(default=(), repr=False)
     notes: tuple = ()
+
+    def on(self, part: slice) -> "Lobes":
+        """The lobes on ``rpm[part]`` (an ascending grid's slice): pockets found again; the
+        critical depth kept for the zero-order lobes (the minimum over their whole scan),
+        the lowest limit on the slice otherwise."""
+        from dataclasses import replace
+
+        rpm, a = self.rpm[part], self.a_lim[part]
+        if rpm.size == self.rpm.size:
+            return self
+        fin = a[np.isfinite(a)]
+        crit = self.a_crit if self.method == "zoa" else (float(fin.min()) if fin.size else float("inf"))
+        return replace(self, rpm=rpm, a_lim=a, chatter_hz=self.chatter_hz[part], a_crit=crit,
+                       pockets=_pockets(rpm, a), flip=None if self.flip is None else self.flip[part])
 
     @property
     def instability(self) -> list[str]:
@@ -451,20 +452,41 @@ def _pockets(grid, a) -> tuple:
 METHODS = ("auto", "zoa", "sdm")
 
 
+#: Modes whose peak compliance 1/(2ζk) is below this fraction of the strongest one's (in
+#: either direction) are left out of the semi-discretization: they barely move the lobes
+#: and a fast weak mode would set the step.
+WEAK_MODE = 0.1
+
+
 def fit_modes(freq_hz, phi_xx, phi_yy, what: str = "tool-point FRF"):
-    """(ModalSet x, ModalSet y or None for a rigid y, notes) fitted to the tool-point FRFs."""
+    """(ModalSet x, ModalSet y or None for a rigid y, notes) fitted to the tool-point FRFs,
+    without the weak modes (``WEAK_MODE``); the notes say how well the fits reproduce the
+    FRFs and what was left out."""
     from taptune.machine.simulate import modal_fit
 
-    notes = []
     fx = modal_fit(freq_hz, phi_xx, what=f"{what} (x)")
-    notes.append(f"x: {fx.modes.n_modes} mode(s) reproduce the FRF to {100 * fx.rel_error:.1f} %")
+    fits = {"x": fx}
     if phi_yy is None or phi_yy is phi_xx or np.array_equal(phi_yy, phi_xx):
-        return fx.modes, fx.modes, notes[:1] + ["y: the x modes"]
-    if np.max(np.abs(phi_yy)) < 1e-6 * np.max(np.abs(phi_xx)):
-        return fx.modes, None, notes + ["y: rigid"]
-    fy = modal_fit(freq_hz, phi_yy, what=f"{what} (y)")
-    notes.append(f"y: {fy.modes.n_modes} mode(s) reproduce the FRF to {100 * fy.rel_error:.1f} %")
-    return fx.modes, fy.modes, notes
+        fits["y"] = fx
+    elif np.max(np.abs(phi_yy)) < 1e-6 * np.max(np.abs(phi_xx)):
+        fits["y"] = None
+    else:
+        fits["y"] = modal_fit(freq_hz, phi_yy, what=f"{what} (y)")
+    peak = max(np.max(1 / (2 * np.array(ft.modes.damping_ratio) * np.array(ft.modes.stiffness_n_m)))
+               for ft in fits.values() if ft is not None)
+    notes, sets = [], {}
+    for d, ft in fits.items():
+        if ft is None:
+            notes.append(f"{d}: rigid")
+            sets[d] = None
+            continue
+        m = ft.modes
+        strong = 1 / (2 * np.array(m.damping_ratio) * np.array(m.stiffness_n_m)) >= WEAK_MODE * peak
+        sets[d] = type(m)(np.array(m.freq_hz)[strong], np.array(m.damping_ratio)[strong],
+                          np.array(m.stiffness_n_m)[strong])
+        weak = "" if strong.all() else f", {int((~strong).sum())} weak one(s) left out"
+        notes.append(f"{d}: {m.n_modes} mode(s) reproduce the FRF to {100 * ft.rel_error:.1f} %{weak}")
+    return sets["x"], sets["y"], notes
 
 
 def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc: float, diameter: float,

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.machine.lobes import engagement_angles
+from taptune.machine.engagement import engagement_angles
 
 #: Steps per period of the fastest mode in the active part of a tooth period.
 STEPS_PER_MODE = 24
@@ -61,7 +61,7 @@ STEPS_PER_MODE = 24
 MIN_NODES = 8
 NODES_PER_PERIOD = 4.0
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
-MAX_NODES = 48
+MAX_NODES = 32
 #: Relative tolerance of the limiting depth.
 DEPTH_RTOL = 5e-3
 #: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
@@ -71,6 +71,8 @@ REL_SPACING_MAX = 0.005
 REL_SPACING_DENSE = 0.01
 #: Lobes narrower than this relative speed window (±1.5 %) are not resolved point by point.
 DENSE_WINDOW = 0.015
+#: Every COARSE-th sampled speed is searched from the guide, the others from their neighbours.
+COARSE = 4
 #: Rounds of extra samples beside each local minimum and maximum of the sampled limit.
 REFINE_ROUNDS = 2
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
@@ -342,7 +344,21 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
     start = np.where(np.isfinite(start) & (start > 0), start, fallback)
     run = (cols, geom, teeth, ktc, krc, f_max, depth_cap)
-    a_s, flip_s, chat_s = _limits(run, tau, start, ok)
+    # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
+    # tight first bracket: about half the evaluations).
+    coarse = np.zeros(samples.size, bool)
+    coarse[::COARSE] = True
+    coarse[-1] = True
+    a_s = np.full(samples.size, np.inf)
+    flip_s = np.zeros(samples.size, bool)
+    chat_s = np.full(samples.size, np.nan)
+    a_s[coarse], flip_s[coarse], chat_s[coarse] = _limits(run, tau[coarse], start[coarse], ok[coarse])
+    rest = ~coarse
+    known = coarse & ok & np.isfinite(a_s)
+    if rest.any():
+        warm = known.sum() >= 2
+        guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
+        a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
     for _ in range(REFINE_ROUNDS):
@@ -358,7 +374,7 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         tau_n = 60.0 / (teeth * new)
         guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
         guess = np.where(np.isfinite(guess), guess, start[0])
-        a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool))
+        a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool), warm=True)
         samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
         cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
@@ -368,8 +384,9 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
 
 
-def _limits(run, tau, start, ok):
-    """Limit, flip flag and chatter frequency at each tooth period ``tau`` where ``ok``."""
+def _limits(run, tau, start, ok, warm: bool = False):
+    """Limit, flip flag and chatter frequency at each tooth period ``tau`` where ``ok``
+    (``warm``: ``start`` is a close guess, :func:`_search`)."""
     cols, geom, teeth, ktc, krc, f_max, depth_cap = run
     a_s = np.full(tau.size, np.inf)
     flip_s = np.zeros(tau.size, bool)
@@ -383,20 +400,22 @@ def _limits(run, tau, start, ok):
             continue
         p, between = _resolution(geom[2] * tau[chunk].max(), f_max, None, None)
         plan = _plan(p, between)
-        a, fl, ch = _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, plan)
+        a, fl, ch = _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, plan, warm)
         a_s[chunk], flip_s[chunk], chat_s[chunk] = a, fl, ch
     return a_s, flip_s, chat_s
 
 
-def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan):
-    """Limiting depth per speed: bracket by factors of 2 from ``start``, then regula falsi on log|μ|."""
+def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
+    """Limiting depth per speed: bracket from ``start`` by growing factors (2, 4, 16 … cold; 1.04,
+    1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|."""
     b = tau.size
     lo = np.zeros(b)  # largest depth known stable
     hi = np.full(b, np.inf)  # smallest known unstable
     glo = np.full(b, np.nan)  # log|μ| at lo (NaN: at zero depth, not evaluated)
     ghi = np.full(b, np.nan)
     mu_hi = np.full(b, np.nan + 0j)
-    trial = np.minimum(0.7 * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
+    grow = np.full(b, 1.04 if warm else 2.0)
+    trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
     for _ in range(60):
@@ -419,10 +438,12 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan):
                 if lo[j] >= depth_cap * (1 - 1e-9):
                     done[j] = True
                     continue
-                nxt[j] = min(2 * max(lo[j], trial[j]), depth_cap)
+                nxt[j] = min(grow[j] * max(lo[j], trial[j]), depth_cap)
+                grow[j] = grow[j] ** 2
                 continue
             if lo[j] == 0 and np.isnan(glo[j]):
-                nxt[j] = 0.25 * hi[j]
+                nxt[j] = hi[j] / grow[j]
+                grow[j] = grow[j] ** 2
                 continue
             if hi[j] / lo[j] - 1 < DEPTH_RTOL:
                 done[j] = True
@@ -469,10 +490,11 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
         ch = np.full(grid.size, chat_s[0])
     else:
         inv_s, inv_g = 1.0 / samples, 1.0 / grid
-        big = np.where(np.isfinite(a_s), a_s, np.nan)
+        big = np.where(np.isfinite(a_s) & ok, a_s, np.nan)
         cap = np.nanmax(big) * 1e3 if np.isfinite(big).any() else 1.0
         filled = np.where(np.isfinite(a_s), a_s, cap)
-        a = np.interp(inv_g, inv_s[::-1], filled[::-1])
+        use = ok if ok.any() else np.ones(ok.size, bool)  # speeds left to the ZOA take no part
+        a = np.interp(inv_g, inv_s[use][::-1], filled[use][::-1])
         near = np.clip(np.searchsorted(samples, grid), 0, samples.size - 1)
         left = np.clip(near - 1, 0, samples.size - 1)
         near = np.where(np.abs(samples[left] - grid) < np.abs(samples[near] - grid), left, near)
@@ -486,7 +508,7 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
             in_dense = dense[near]
             for i in np.flatnonzero(in_dense):
                 a[i] = np.min(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)])
-        a = np.where(ok[near], a, np.nan)  # left to the zero-order lobes
+        a = np.where(ok[near] & (grid >= samples[ok].min() if ok.any() else False), a, np.nan)  # left to the ZOA
     out_a, out_f, out_c = np.empty(grid.size), np.empty(grid.size, bool), np.empty(grid.size)
     out_a[order], out_f[order], out_c[order] = a, fl, ch
     return SdmLobes(rpm=speeds, a_lim=out_a, flip=out_f, chatter_hz=out_c, sample_rpm=samples, sample_a=a_s,

@@ -21,8 +21,9 @@ equation the lobes describe, so its growth per tooth period is the critical Floq
 multiplier's modulus.
 
 Integration: the tooth period is cut into m equal steps (so x(t − τ) is a stored sample,
-no interpolation), m ≥ max(``steps_per_tooth``, ``steps_per_period`` · τ · f_max,
-``steps_per_cut`` / in-cut fraction). Over each step every mode is advanced exactly
+no interpolation), m ≥ max(``STEPS_PER_TOOTH``, ``STEPS_PER_PERIOD`` · τ · f_max,
+``STEPS_PER_CUT`` / in-cut fraction), chosen so that the teeth enter and leave the cut on
+step boundaries (the force's jumps are then integrated exactly). Over each step every mode is advanced exactly
 (matrix exponential) under a force that varies linearly between the step's ends
 (first-order hold); the force at the step's end depends on the position there, which is
 solved exactly (a 2 × 2 linear system per step, the contact set taken from a predictor).
@@ -45,12 +46,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
-from taptune.machine.lobes import engagement_angles
+from taptune.machine.engagement import engagement_angles
 
 #: Fewest integration steps per tooth period, per period of the fastest mode, per cut arc.
 STEPS_PER_TOOTH = 100
 STEPS_PER_PERIOD = 40
 STEPS_PER_CUT = 40
+#: MillingRun.flip: the median cosine between successive once-per-period differences below this.
+FLIP_COSINE = -0.99
 
 
 @dataclass(frozen=True)
@@ -169,8 +172,21 @@ def _step_matrices(wn, z, k, h: float):
     big[:, 1, 2] = wn**2 / k
     big[:, 2, 3] = 1.0
     e = expm(big * h)
-    gamma1, gamma2 = e[:, :2, 2], e[:, :2, 3]  # responses to F(0) held and to the ramp (F(h) − F(0))
+    # Responses to F(0) held and to a ramp of unit slope; the ramp of the step is (F(h) − F(0)) / h.
+    gamma1, gamma2 = e[:, :2, 2], e[:, :2, 3] / h
     return e[:, :2, :2], gamma1 - gamma2, gamma2
+
+
+def _aligned(m0: int, cut_fraction: float) -> int:
+    """The step count from ``m0`` to 2 m0 that puts a tooth's exit nearest a step boundary
+    (entries lie on boundaries): the first within 2 % of a step, else the nearest."""
+    frac = cut_fraction % 1.0
+    if frac == 0.0:
+        return m0
+    ms = np.arange(m0, 2 * m0 + 1)
+    miss = np.abs(ms * frac - np.round(ms * frac))
+    good = np.flatnonzero(miss <= 0.02)
+    return int(ms[good[0]] if good.size else ms[np.argmin(miss)])
 
 
 def steps_per_tooth(rpm: float, teeth: int, f_max_hz: float, cut_fraction: float) -> int:
@@ -233,23 +249,34 @@ def simulate_milling(modes_x: ModalSet, modes_y: ModalSet | None, *, teeth: int,
     d, wn, z, k = _mode_columns(modes_x, modes_y)
     tau = 60.0 / (rpm * teeth)
     cut_fraction = (phi_ex - phi_st) / (2 * np.pi / teeth)
-    m = int(steps) if steps else steps_per_tooth(rpm, teeth, wn.max() / (2 * np.pi), cut_fraction)
+    m = int(steps) if steps else _aligned(steps_per_tooth(rpm, teeth, wn.max() / (2 * np.pi), cut_fraction),
+                                          cut_fraction)
     h = tau / m
     n_steps = int(np.ceil(duration_s / h)) + 1
     e, g0, g1 = _step_matrices(wn, z, k, h)
 
     # Tooth geometry repeats every tooth period: per phase p of the m steps and tooth j.
+    # Tooth 0 enters at t = 0, so every entry lies on a step boundary (and, with the step
+    # count of _aligned, every exit nearly so). A force sample at a boundary has two values:
+    # the left limit ends a step (the teeth cutting just before), the right limit starts
+    # the next (just after); first-order hold is then exact at the jumps.
     omega = 2 * np.pi * rpm / 60.0
-    phase = (omega * h * np.arange(m)[:, None] + 2 * np.pi * np.arange(teeth)[None, :] / teeth) % (2 * np.pi)
-    arc = (phase >= phi_st) & (phase <= phi_ex)
+    phase = (phi_st + omega * h * np.arange(m)[:, None] + 2 * np.pi * np.arange(teeth)[None, :] / teeth) % (2 * np.pi)
+    rel = (phase - phi_st) % (2 * np.pi)
+    rel = np.where(rel > 2 * np.pi - 1e-9, 0.0, rel)
+    width = phi_ex - phi_st
+    arc_left = (rel > 1e-9) & (rel <= width + 1e-9)
+    arc_right = (rel < width - 1e-9)
     s, c = np.sin(phase), np.cos(phase)
     u = np.stack([-(ktc * c + krc * s), ktc * s - krc * c], axis=-1)  # force per a·h, (m, N, 2)
     edge = np.stack([-(kte * c + kre * s), kte * s - kre * c], axis=-1)  # force per a
     w = np.stack([s, c], axis=-1)  # chip-thickness direction
     static = u * (feed_per_tooth * s)[..., None] + edge  # per tooth and a, (m, N, 2)
-    h_all = np.einsum("pni,pnj->pnij", u * arc[..., None], w)  # linear term per tooth, (m, N, 2, 2)
-    h_lin = h_all.sum(axis=1)
-    f_lin = (static * arc[..., None]).sum(axis=1)
+    h_all = np.einsum("pni,pnj->pnij", u, w)  # linear term per tooth, (m, N, 2, 2)
+    h_left = np.einsum("pn,pnij->pij", arc_left, h_all)
+    h_right = np.einsum("pn,pnij->pij", arc_right, h_all)
+    f_left = np.einsum("pn,pni->pi", arc_left, static)
+    f_right = np.einsum("pn,pni->pi", arc_right, static)
 
     sel = np.zeros((len(wn), 2))
     sel[np.arange(len(wn)), d] = 1.0
@@ -278,17 +305,18 @@ def simulate_milling(modes_x: ModalSet, modes_y: ModalSet | None, *, teeth: int,
         bq = e00 * q + e01 * v + g0[:, 0] * fm
         bv = e10 * q + e11 * v + g0[:, 1] * fm
         xb = bq @ sel
-        dx = xb - hist[:, :, p]
+        xd = hist[:, :, p].copy()
+        dx = xb - xd
         if contact_loss:
             # Contact set from a predictor (the end force taken as the start force).
             xp = xb + gx * force
-            chip = feed_per_tooth * s[p] + (xp - hist[:, :, p]) @ w[p].T  # (nb, N)
-            on = arc[p] & (chip > 0)
+            chip = feed_per_tooth * s[p] + (xp - xd) @ w[p].T  # (nb, N)
+            on = arc_left[p] & (chip > 0)
             hm = np.einsum("bn,nij->bij", on, h_all[p])
             f0 = on @ static[p]
         else:
-            hm = np.broadcast_to(h_lin[p], (nb, 2, 2))
-            f0 = np.broadcast_to(f_lin[p], (nb, 2))
+            hm = np.broadcast_to(h_left[p], (nb, 2, 2))
+            f0 = np.broadcast_to(f_left[p], (nb, 2))
         # F = a [H (xb + G F − x(t−τ)) + F0]  →  (I − a H G) F = a (H (xb − x(t−τ)) + F0)
         rhs = a_col * (np.einsum("bij,bj->bi", hm, dx) + f0)
         m00 = 1 - a * hm[:, 0, 0] * gx[0]
@@ -302,6 +330,13 @@ def simulate_milling(modes_x: ModalSet, modes_y: ModalSet | None, *, teeth: int,
         v = bv + g1[:, 1] * fm
         x_now = q @ sel
         hist[:, :, p] = x_now
+        # The right limit at this boundary starts the next step.
+        if contact_loss:
+            chip = feed_per_tooth * s[p] + (x_now - xd) @ w[p].T
+            on = arc_right[p] & (chip > 0)
+            force = a_col * (np.einsum("bn,nij,bj->bi", on, h_all[p], x_now - xd) + on @ static[p])
+        else:
+            force = a_col * ((x_now - xd) @ h_right[p].T + f_right[p])
         x_rec[step], v_rec[step], f_rec[step] = x_now, v @ sel, force
         if p == 0:
             per_state.append(np.concatenate([q, v / wn], axis=1))
@@ -336,9 +371,10 @@ def _growth(states) -> tuple[np.ndarray, np.ndarray]:
     half = diff.shape[0] // 2
     tail = np.log(np.maximum(norm[half:], 1e-300))
     slope = np.polyfit(np.arange(tail.shape[0]), tail, 1)[0]
-    # Flip: successive differences point opposite ways (cosine of the angle near −1).
+    # Flip: successive differences point opposite ways (cosine of the angle near −1; a Hopf
+    # multiplier at angle θ gives about cos θ, so only θ within ~8° of π passes).
     dots = np.sum(diff[half + 1:] * diff[half:-1], axis=2) / np.maximum(norm[half + 1:] * norm[half:-1], 1e-300)
-    return np.exp(slope), np.median(dots, axis=0) < -0.5
+    return np.exp(slope), np.median(dots, axis=0) < FLIP_COSINE
 
 
 # --------------------------------------------------------------------------- modal fit
@@ -346,6 +382,10 @@ def _growth(states) -> tuple[np.ndarray, np.ndarray]:
 #: A peak must stand this many times above the dip separating it from any higher one
 #: (noise ripples on a measured peak do not; two real modes do).
 MIN_PROMINENCE = 1.25
+#: The modal fit's band and weighting floor, relative to the FRF's peak (modal_fit).
+FIT_LEVEL = 0.2
+#: Starting damping ratio of a peak whose local fit fails.
+DEFAULT_DAMPING = 0.03
 
 
 def _prominence(mag, i: int) -> float:
@@ -372,7 +412,8 @@ class ModalFit:
     """Modes fitted to one tool-point FRF and how well they reproduce it.
 
     ``rel_error`` is ‖G_fit − G‖ / ‖G‖ over the fitted band: the frequencies where |G| is at
-    least ``rel_level`` × its peak, widened by three half-power bandwidths around each mode.
+    least ``FIT_LEVEL`` × its peak (where the chatter frequencies lie), widened by three
+    half-power bandwidths around each mode.
     """
 
     modes: ModalSet
@@ -383,15 +424,15 @@ class ModalFit:
         return {"modes": self.modes.to_dict(), "rel_error": self.rel_error, "band_hz": list(self.band_hz)}
 
 
-def modal_fit(freq_hz, frf, *, max_modes: int = 4, rel_level: float = 0.05, tolerance: float = 0.15,
+def modal_fit(freq_hz, frf, *, max_modes: int = 6, rel_level: float = 0.05, tolerance: float = 0.15,
               what: str = "FRF") -> ModalFit:
     """Fit uncoupled viscous modes to a direct tool-point receptance.
 
-    The peaks of |G| (:func:`taptune.machine.peaks.dominant_modes`, at least ``rel_level``
-    of the highest, at most ``max_modes``) give starting frequencies and damping ratios;
-    the modal stiffnesses follow by linear least squares, then all three per mode are
-    refined by nonlinear least squares (relative misfit) over the band that matters for
-    chatter (:class:`ModalFit`).
+    The prominent peaks of |G| (at least ``rel_level`` of the highest, at most
+    ``max_modes``; each one's frequency and damping from
+    :func:`taptune.machine.peaks.dominant_modes` on its own stretch) start the fit; the
+    modal stiffnesses follow by linear least squares, then all three per mode are refined
+    by nonlinear least squares over the band that matters for chatter (:class:`ModalFit`).
 
     Raises
     ------
@@ -411,26 +452,30 @@ def modal_fit(freq_hz, frf, *, max_modes: int = 4, rel_level: float = 0.05, tole
     tops = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1
     tops = [i for i in tops[np.argsort(-mag[tops])]
             if mag[i] >= rel_level * mag.max() and _prominence(mag, i) >= MIN_PROMINENCE][:max_modes]
-    peaks = []
+    start = []
     for i in tops:  # each peak's frequency and damping from a local fit on its own stretch
         near = np.abs(f - f[i]) <= 0.15 * f[i]
-        found = dominant_modes(f[near], g[near], "", rel_level=0.5, max_modes=1)
-        peaks += [p for p in found if np.isfinite(p.damping_ratio) and 0 < p.damping_ratio < 0.5]
-    if not peaks:
+        found = [p for p in dominant_modes(f[near], g[near], "", rel_level=0.5, max_modes=1)
+                 if np.isfinite(p.damping_ratio) and 0 < p.damping_ratio < 0.5]
+        start.append((found[0].hz, found[0].damping_ratio) if found else (f[i], DEFAULT_DAMPING))
+    if not start:
         raise InputError(f"{what}: no resonance peak to fit modes to (the lobes need at least one mode)")
-    peaks.sort(key=lambda p: p.hz)
-    band = mag >= rel_level * mag.max()
-    for p in peaks:
-        band |= np.abs(f - p.hz) <= 3 * 2 * p.damping_ratio * p.hz
+    start.sort()
+    # The band that decides the lobes: where |G| is large (the chatter frequencies lie
+    # there), and each mode's own neighbourhood; misfit weighted relative to |G| but no
+    # less than FIT_LEVEL of the peak, so that a low flank does not count as much as a peak.
+    band = mag >= FIT_LEVEL * mag.max()
+    for hz, zeta in start:
+        band |= np.abs(f - hz) <= 3 * 2 * zeta * hz
     fb, gb = f[band], g[band]
-    wb = 1.0 / np.maximum(np.abs(gb), 1e-3 * mag.max())  # relative misfit, floored at antiresonances
+    wb = 1.0 / np.maximum(np.abs(gb), FIT_LEVEL * mag.max())
 
     def basis(fn, zeta):
         w, wn = 2 * np.pi * fb[:, None], 2 * np.pi * fn[None, :]
         return wn**2 / (wn**2 - w**2 + 2j * zeta[None, :] * wn * w)
 
-    fn0 = np.array([p.hz for p in peaks])
-    z0 = np.array([p.damping_ratio for p in peaks])
+    fn0 = np.array([hz for hz, _ in start])
+    z0 = np.array([zeta for _, zeta in start])
     b = basis(fn0, z0) * wb[:, None]
     lhs = np.concatenate([b.real, b.imag])
     rhs = np.concatenate([(gb * wb).real, (gb * wb).imag])

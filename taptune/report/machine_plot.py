@@ -67,7 +67,8 @@ def draw_toolpoint(axes, curves, modes_hz=()) -> None:
     axes[0].legend(fontsize="small", ncol=2 if len(curves) > 1 else 1, loc="lower left")
 
 
-def draw_lobes(ax, rpm, a_lim_mm, a_crit_mm, pockets) -> None:
+def draw_lobes(ax, rpm, a_lim_mm, a_crit_mm, pockets, safe_mm=None, band_mm=None, depth_cap_mm=None,
+               safe_pockets=()) -> None:
     """Draw a stability-lobe diagram: the stable area, the limit, the critical depth and the best pockets.
 
     Parameters
@@ -81,20 +82,48 @@ def draw_lobes(ax, rpm, a_lim_mm, a_crit_mm, pockets) -> None:
     pockets : sequence of dict
         ``{"rpm", "a_lim_mm"}`` of the lobe peaks, best first; the best eight are marked
         and the best three labelled (at low speed the lobes crowd into many tiny peaks).
+        With safe pockets only the best three peaks are marked, unlabelled.
+    safe_mm : array_like, optional
+        The depth stable with the band's confidence per speed [mm] (dashed).
+    band_mm : (low, high) array_like, optional
+        The lobes' uncertainty band [mm] (shaded).
+    depth_cap_mm : float, optional
+        The tool's flute length [mm]: a line, and the stable area stops there.
+    safe_pockets : sequence of dict
+        ``{"rpm_low", "rpm_high", "rpm", "a_mm"}`` best first: drawn as bars over their window.
     """
     rpm = np.asarray(rpm, dtype=float)
     a = np.asarray(a_lim_mm, dtype=float)
     finite = np.isfinite(a)
+    if band_mm is not None:
+        lo, hi = (np.asarray(b, dtype=float) for b in band_mm)
+        if depth_cap_mm is not None:
+            lo, hi = np.minimum(lo, depth_cap_mm), np.minimum(hi, depth_cap_mm)
+        ax.fill_between(rpm, lo, hi, color="#f39c12", alpha=0.25, lw=0, label="uncertainty band")
     ax.fill_between(rpm, 0, np.where(finite, a, np.nan), color="#27ae60", alpha=0.15, lw=0, label="stable")
     ax.plot(rpm, a, color="#1e8449", lw=1.3, label="stability limit")
+    if safe_mm is not None:
+        ax.plot(rpm, np.asarray(safe_mm, dtype=float), color="#2c3e50", lw=1.0, ls="--", label="safe depth")
+    if depth_cap_mm is not None:
+        ax.axhline(depth_cap_mm, color="#7f8c8d", lw=1.2, ls=":", label=f"flute length {depth_cap_mm:g} mm")
     if a_crit_mm is not None:
         ax.axhline(a_crit_mm, color="#c0392b", ls="--", lw=1.0, label=f"critical depth {a_crit_mm:.3g} mm")
+    for k, p in enumerate(safe_pockets[:LABELLED_POCKETS + 2]):
+        ax.plot([p["rpm_low"], p["rpm_high"]], [p["a_mm"]] * 2, color="#8e44ad", lw=3.0, solid_capstyle="butt",
+                label="safe pocket" if k == 0 else None)
+        if k < LABELLED_POCKETS:
+            ax.annotate(f"{p['rpm_low']:.0f}–{p['rpm_high']:.0f} rpm\n{p['a_mm']:.2g} mm", (p["rpm"], p["a_mm"]),
+                        textcoords="offset points", xytext=(0, -22), ha="center", fontsize="x-small", color="#8e44ad")
+    if len(safe_pockets):
+        pockets = ()  # the safe pockets are the advice; the sharp peaks would compete with them
     for k, p in enumerate(pockets[:MARKED_POCKETS]):
         ax.plot(p["rpm"], p["a_lim_mm"], "v", color="#2c3e50", ms=6 if k < LABELLED_POCKETS else 4)
         if k < LABELLED_POCKETS:
             ax.annotate(f"{p['rpm']:.0f} rpm\n{p['a_lim_mm']:.2g} mm", (p["rpm"], p["a_lim_mm"]),
                         textcoords="offset points", xytext=(0, 6), ha="center", fontsize="x-small")
     top = max(float(a[finite].max()) if finite.any() else 0.0, a_crit_mm or 0.0)
+    if depth_cap_mm is not None:
+        top = min(top, depth_cap_mm) if top > 0 else depth_cap_mm
     ax.set_ylim(0, 1.25 * top if top > 0 else 1.0)
     if rpm.size:
         ax.set_xlim(rpm.min(), rpm.max())
@@ -132,7 +161,8 @@ def plot_toolpoint(curves, path, title: str = "") -> None:
     _save(fig, path)
 
 
-def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, title: str = "") -> None:
+def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, title: str = "", safe_mm=None,
+               band_mm=None, depth_cap_mm=None, safe_pockets=()) -> None:
     """Write a PNG of a stability-lobe diagram (:func:`draw_lobes`), the chatter frequency below if given.
 
     Parameters are those of :func:`draw_lobes`, plus ``path`` (the PNG) and
@@ -143,11 +173,11 @@ def plot_lobes(rpm, a_lim_mm, a_crit_mm: float, pockets, path, chatter_hz=None, 
     rows = 2 if chatter_hz is not None else 1
     fig, axes = plt.subplots(rows, 1, figsize=(8, 6.5 if rows == 2 else 4.5), sharex=True, layout="constrained",
                              gridspec_kw={"height_ratios": [3, 1][:rows]}, squeeze=False)
-    draw_lobes(axes[0, 0], rpm, a_lim_mm, a_crit_mm, pockets)
+    draw_lobes(axes[0, 0], rpm, a_lim_mm, a_crit_mm, pockets, safe_mm, band_mm, depth_cap_mm, safe_pockets)
     if chatter_hz is not None:
         axes[0, 0].set_xlabel("")
         draw_chatter(axes[1, 0], rpm, chatter_hz)
-    axes[0, 0].set_title(_wrap(title or "stability lobes (zero-order approximation)"), fontsize=9)
+    axes[0, 0].set_title(_wrap(title or "stability lobes"), fontsize=9)
     _save(fig, path)
 
 

@@ -176,7 +176,8 @@ def test_lobes_single_mode_slotting_matches_the_closed_form(tmp_path, capsys):
     write_toolpoint_csv(path, f, g, rigid)
     out = tmp_path / "l.json"
     code, text, err = taptune(capsys, "lobes", "--frf", path, "--teeth", 4, "--ktc", 902, "--krc", 243,
-                              "--diameter", 12, "--ae", 12, "--milling", "down", "--rpm", 2000, 20000, 5, "--json", out)
+                              "--diameter", 12, "--ae", 12, "--milling", "down", "--rpm", 2000, 20000, 5, "--json", out,
+                              "--method", "zoa")
     assert code == 0, err
     assert "slotting" in text
     data = json.loads(out.read_text())
@@ -216,7 +217,7 @@ def test_lobes_from_the_d01_frf_match_the_independent_truth(tmp_path, capsys):
     out = tmp_path / "l.json"
     code, _, err = taptune(capsys, "lobes", "--frf", D01 / "toolpoint_frf.csv", "--teeth", a["teeth"], "--ktc", a["ktc"],
                            "--krc", a["krc"], "--diameter", a["diameter"], "--ae", a["ae"], "--milling", a["milling"],
-                           "--rpm", *a["rpm"], "--json", out, "--csv", tmp_path / "l.csv")
+                           "--rpm", *a["rpm"], "--json", out, "--csv", tmp_path / "l.csv", "--method", "zoa")
     assert code == 0, err
     data = json.loads(out.read_text())
     np.testing.assert_allclose(data["rpm"], truth["rpm"])
@@ -224,16 +225,17 @@ def test_lobes_from_the_d01_frf_match_the_independent_truth(tmp_path, capsys):
     assert np.median(envelope) <= 0.01, np.median(envelope)
     assert data["a_crit_mm"] == pytest.approx(truth["a_crit_mm"], rel=0.01)
     rows = (tmp_path / "l.csv").read_text().splitlines()
-    assert rows[0] == "rpm,a_lim_mm,chatter_hz" and len(rows) == len(truth["rpm"]) + 1
+    assert rows[0] == "rpm,a_lim_mm,a_lim_mm_safe,chatter_hz,instability" and len(rows) == len(truth["rpm"]) + 1
 
 
 def test_lobes_on_the_machine_equal_lobes_from_the_toolpoint_csv(tmp_path, capsys):
     """The two routes of MACHINE.md (predicted on the machine, --frf of the written FRF) agree."""
-    cut = ["--teeth", 4, "--material", "al6082", "--ae", 8, "--milling", "down", "--rpm", 8000, 20000, 20]
+    cut = ["--teeth", 4, "--material", "al6082", "--ae", 8, "--milling", "down", "--rpm", 8000, 20000, 20,
+           "--method", "zoa"]
     code, text, err = taptune(capsys, "lobes", *DEMO, *cut, "--freq", 200, 8000, 2, "--json", tmp_path / "a.json",
                               "--plot", tmp_path / "lobes.png")
     assert code == 0, err
-    assert "critical depth" in text and "pocket [rpm]" in text
+    assert "critical depth" in text and "safe pocket [rpm]" in text
     code, _, err = taptune(capsys, "toolpoint", *DEMO, "--freq", 200, 8000, 2, "--csv", tmp_path / "tp.csv")
     assert code == 0, err
     code, _, err = taptune(capsys, "lobes", "--frf", tmp_path / "tp.csv", "--diameter", 16, *cut, "--json", tmp_path / "b.json")
@@ -247,7 +249,7 @@ def test_lobes_on_the_machine_equal_lobes_from_the_toolpoint_csv(tmp_path, capsy
 
 def test_lobes_default_speed_range_reaches_the_machine_top_speed(tmp_path, capsys):
     code, _, err = taptune(capsys, "lobes", *DEMO, "--teeth", 3, "--ktc", 800, "--krc", 200, "--ae", 4, "--milling", "up",
-                           "--freq", 200, 8000, 4, "--json", tmp_path / "l.json")
+                           "--freq", 200, 8000, 4, "--json", tmp_path / "l.json", "--method", "zoa")
     assert code == 0, err
     rpm = json.loads((tmp_path / "l.json").read_text())["rpm"]
     assert rpm[0] == 500 and rpm[-1] == 24000  # [machine] max_rpm of the example
@@ -271,7 +273,7 @@ def test_lobes_bad_inputs_end_in_one_line(tmp_path, capsys):
     assert "--rpm 500 100 10" in one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 500, 100, 10)
     err = one_line_error(capsys, "lobes", "--frf", good, "--diameter", 10, *cut, "--rpm", 100, 1e9, 0.01)
     assert "--rpm 100 1e+09 0.01" in err and "too fine" in err  # not "needs 0 < MIN < MAX"
-    assert "--frf CSV" in one_line_error(capsys, "lobes", *cut)
+    assert "--frf FILE" in one_line_error(capsys, "lobes", *cut)
     # The cut is checked before the tool-point FRF is built, in the option's words.
     assert "--ae must be > 0 mm" in one_line_error(capsys, "lobes", *DEMO, "--teeth", 4, "--ktc", 902, "--krc", 243,
                                                    "--ae", -1, "--milling", "down")

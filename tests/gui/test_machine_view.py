@@ -58,7 +58,8 @@ def test_machine_view_draws_the_frf_and_lobes_as_the_cli_computes_them(qtbot, wi
     status = main(["lobes", str(MACHINE.parents[1] / "er32_d16.toml"), "--holder", holder_a.name,
                    "--library", str(library_path), "--machine", str(MACHINE), "--teeth", str(c.teeth),
                    "--ktc", f"{c.ktc_mpa:g}", "--krc", f"{c.krc_mpa:g}", "--ae", f"{c.ae_mm:g}", "--milling",
-                   c.milling, "--rpm", f"{c.rpm_min:g}", f"{c.rpm_max:g}", "10", "--json", str(out)])
+                   c.milling, "--rpm", f"{c.rpm_min:g}", f"{c.rpm_max:g}", "10", "--json", str(out),
+                   "--method", "zoa"])  # the view's first picture is the zero-order preview
     capsys.readouterr()
     assert status == 0
     cli = json.loads(out.read_text())
@@ -152,3 +153,16 @@ def test_the_machine_view_warns_of_another_interface_and_an_off_plane_gauge_leng
     view.set_source(catalogue)
     text = view.machine_label.text()
     assert "gauge_length = 100 mm puts the coupling plane 0 mm" in text and "gauge length 68 mm" in text
+
+
+@pytest.mark.slow
+def test_the_semi_discretization_and_the_band_follow_the_preview(qtbot, window, holder_a, reference_assembly):
+    _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    with qtbot.waitSignal(view.refined, timeout=600000) as blocker:
+        pass
+    stickout_mm, cut, lobes, band = blocker.args[0]
+    assert lobes.method in ("sdm", "zoa") and band.samples >= 50 and "prediction band" in band.sources
+    assert "Safe pockets (90 %)" in view.summary.text()
+    ax_l = view.canvas.figure.axes[1]
+    assert view._artists["band"] is not None and len(ax_l.collections) >= 2
