@@ -23,6 +23,7 @@ COMMANDS = {
     "check": "check a library holder with one tap: consistent, differs (worn, badly seated) or inconclusive",
     "toolpoint": "tool-point FRF of a holder and tool on a machine (spindle receptance coupling)",
     "lobes": "milling stability lobes from the tool-point FRF (zero-order approximation)",
+    "cut": "listen to a milling cut: stable or chatter, and the next speed to try",
     "spindle": "spindle receptance from hammer tests on a dummy holder (inverse receptance coupling)",
     "batch": "identify every recording under folders, in parallel",
     "library": "list, show, export, import or remove holders; export receptances (UFF58, CSV)",

@@ -233,6 +233,10 @@ class MachineView(QWidget):
         layout.addLayout(cut)
         layout.addWidget(self.stickout)
         layout.addWidget(self.summary)
+        from taptune.gui.cut_panel import CutPanel  # listen to a cut (issue 21)
+
+        self.cut_panel = CutPanel(self)
+        layout.addWidget(self.cut_panel)
         layout.addWidget(self.canvas, 1)
         self._material_changed(self.material.currentText())
 
@@ -448,6 +452,7 @@ class MachineView(QWidget):
         top = max(a / MM for _, a in lobes.pockets) if lobes.pockets else 4 * a_crit
         ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit, 1.1 * cap if np.isfinite(cap) else np.inf))
         ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
+        self.cut_panel.mark(ax_l)  # the observed cuts, ✓ / ✗
         self.canvas.draw_idle()
 
     def draw_refined(self, lobes, band) -> None:
@@ -476,6 +481,7 @@ class MachineView(QWidget):
                                    f"({100 * band.confidence:.0f} %)"))
         kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
         ax_l.set_title(f"Stability lobes ({kind}): stable below the line", loc="left")
+        self.cut_panel.mark(ax_l)
         self.canvas.draw_idle()
 
     def _mark(self, a_crit_mm: float, best) -> None:

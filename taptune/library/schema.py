@@ -2,7 +2,7 @@
 
 A library file is one JSON document::
 
-    {"schema": "taptune-holder-library", "version": 1, 2 or 3 (see VERSION),
+    {"schema": "taptune-holder-library", "version": 1, 2, 3 or 4 (see VERSION),
      "holders": {NAME: ENTRY, ...}}
 
 with ``ENTRY`` as written by :meth:`HolderEntry.to_dict` (lengths in mm, moduli in GPa,
@@ -26,7 +26,8 @@ holder parameters in library units, see :mod:`taptune.model.params`)::
      "checks": [{"date", "recording", "sha256", "tool": "<tool name>", "stickout_mm",  # optional
                  "verdict": "consistent" | "differs" | "inconclusive",
                  "modes": [{"mode", "measured_hz" | null, "predicted_hz", "band_hz"}, ...],
-                 "taptune_version"}, ...]}
+                 "taptune_version"}, ...],
+     "observations": [CUT, ...]}                         # optional: taptune.library.observations
 
 Every read is
 validated here by hand-written checks on plain JSON data: nothing is ever executed,
@@ -64,19 +65,23 @@ from taptune.io.assembly import (
     validate,
     validate_holder,
 )
+from taptune.library.observations import CutObservation, ObservationError
 from taptune.model.params import NAMES, HolderParams
 
 SCHEMA = "taptune-holder-library"
 #: The newest format this build reads and writes. Version 2 added the ``checks`` history,
-#: version 3 the stick-out tolerance stated at each identification. A library is written
+#: version 3 the stick-out tolerance stated at each identification, version 4 the cuts
+#: observed with the holder (``observations``). A library is written
 #: with the oldest version that holds what it has (1 without either), so older taptunes
 #: keep reading it, and refuse a file they cannot read with "written by a newer taptune"
 #: instead of tripping over an unknown key.
-VERSION = 3
+VERSION = 4
 #: The format of a library without ``checks`` (what every taptune before checks reads).
 VERSION_WITHOUT_CHECKS = 1
 #: The format of a library with checks but no stated tolerances.
 VERSION_WITH_CHECKS = 2
+#: The format of a library without cut observations (version 4 added them).
+VERSION_WITHOUT_OBSERVATIONS = 3
 
 # Units of the holder parameters in tables and CSV headers (ASCII so spreadsheets agree).
 PARAM_UNITS = {
@@ -615,6 +620,7 @@ class HolderEntry:
     model_options: dict = field(default_factory=dict)
     identifications: tuple[ProvenanceRecord, ...] = ()
     checks: tuple[CheckRecord, ...] = ()
+    observations: tuple[CutObservation, ...] = ()
     warnings: tuple[str, ...] = field(default=(), compare=False)
 
     def __post_init__(self):
@@ -622,6 +628,7 @@ class HolderEntry:
         object.__setattr__(self, "param_sets", tuple(self.param_sets))
         object.__setattr__(self, "identifications", tuple(self.identifications))
         object.__setattr__(self, "checks", tuple(self.checks))
+        object.__setattr__(self, "observations", tuple(self.observations))
 
     @classmethod
     def create(
@@ -655,7 +662,8 @@ class HolderEntry:
             "param_sets": [p.to_dict() for p in self.param_sets],
             "model_options": self.model_options,
             "identifications": [r.to_dict() for r in self.identifications],
-        } | ({"checks": [c.to_dict() for c in self.checks]} if self.checks else {})
+        } | ({"checks": [c.to_dict() for c in self.checks]} if self.checks else {}) | (
+            {"observations": [o.to_dict() for o in self.observations]} if self.observations else {})
 
     @classmethod
     def from_dict(cls, data, source: str = "<library>") -> "HolderEntry":
@@ -665,9 +673,15 @@ class HolderEntry:
         well-formed but implausible (:func:`holder_range_problem`) is kept, with a warning
         in ``warnings`` (writing such an entry is refused: :func:`checked_entry`).
         """
-        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__ if f not in ("checks", "warnings")),
-                    ("checks",))
+        optional = ("checks", "observations")
+        d = _object(data, source, "", tuple(f for f in cls.__dataclass_fields__ if f not in optional + ("warnings",)),
+                    optional)
         checks = _list(d.get("checks", []), source, "checks")
+        try:
+            observations = tuple(CutObservation.from_dict(o, source, f"observations[{i}]")
+                                 for i, o in enumerate(_list(d.get("observations", []), source, "observations")))
+        except ObservationError as err:
+            raise LibraryFormatError(str(err)) from None
         holder = check_holder_dict(d["holder"], source)
         interface = _text(d["interface"], source, "interface", _MAX_NAME)
         if interface != holder["interface"]:
@@ -693,6 +707,7 @@ class HolderEntry:
                 ProvenanceRecord.from_dict(r, source, f"identifications[{i}]") for i, r in enumerate(records)
             ),
             checks=tuple(CheckRecord.from_dict(c, source, f"checks[{i}]") for i, c in enumerate(checks)),
+            observations=observations,
             warnings=warnings,
         )
 
@@ -802,7 +817,8 @@ class HolderEntry:
         history = list(older.identifications)
         history += [r for r in self.identifications if r not in older.identifications]
         checks = older.checks + tuple(c for c in self.checks if c not in older.checks)
-        return replace(self, identifications=tuple(history), checks=checks)
+        observed = older.observations + tuple(o for o in self.observations if o not in older.observations)
+        return replace(self, identifications=tuple(history), checks=checks, observations=observed)
 
 
 def checked_entry(entry: HolderEntry, source: str) -> HolderEntry:
@@ -904,7 +920,11 @@ def library_version(entries) -> int:
     entries = list(entries)
     stated = any(r.stickout_tolerance_mm is not None for entry in entries for r in entry.identifications)
     with_checks = any(entry.checks for entry in entries)
-    return VERSION if stated else VERSION_WITH_CHECKS if with_checks else VERSION_WITHOUT_CHECKS
+    if any(entry.observations for entry in entries):
+        return VERSION
+    if stated:
+        return VERSION_WITHOUT_OBSERVATIONS
+    return VERSION_WITH_CHECKS if with_checks else VERSION_WITHOUT_CHECKS
 
 
 def library_document(entries: dict[str, HolderEntry]) -> dict:

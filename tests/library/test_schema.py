@@ -156,7 +156,7 @@ def test_validation_names_file_holder_and_key(tmp_path, change, key, problem):
 @pytest.mark.parametrize(
     "text, problem",
     [
-        ('{"schema": "taptune-holder-library", "version": 4, "holders": {}}', "newer taptune"),
+        ('{"schema": "taptune-holder-library", "version": 5, "holders": {}}', "newer taptune"),
         ('{"schema": "taptune-holder-library", "version": "1", "holders": {}}', "version must be a positive integer"),
         ('{"schema": "taptune-holder-library", "version": 1, "holders": []}', "holders must be a JSON object"),
         ('{"schema": "taptune-holder-library", "version": 1, "holders": {}, "x": 1}', "x is not a known key"),
