@@ -74,7 +74,7 @@ class _DictTransaction(Transaction):
     def load(self, name):
         return self.holders.get(name)
 
-    def store(self, entry):
+    def store(self, entry, document=None):
         self.holders[entry.name] = entry
 
     def delete(self, name):

@@ -42,6 +42,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import operator
 import re
 from dataclasses import dataclass, field, replace
 from datetime import datetime, timezone
@@ -64,7 +65,7 @@ from taptune.io.assembly import (
     validate,
     validate_holder,
 )
-from taptune.model.params import NAMES, HolderParams
+from taptune.model.params import _PLAUSIBLE, NAMES, HolderParams
 
 SCHEMA = "taptune-holder-library"
 #: The newest format this build reads and writes. Version 2 added the ``checks`` history,
@@ -89,6 +90,7 @@ PARAM_UNITS = {
     "modulus_factor": "-",
 }
 
+_PLAUSIBLE_PARAMS = {k: (lo, hi) for k, lo, hi in _PLAUSIBLE}
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
 _CONTROL = re.compile(r"[\x00-\x1f]")
 _MAX_NAME = NAME_MAX_LEN  # what an assembly file may name
@@ -118,8 +120,17 @@ def _fail(src: str, key: str, problem: str):
     raise LibraryFormatError(f"{src}: {key} {problem}")
 
 
+_KEY_SETS: dict[tuple, tuple[frozenset, frozenset]] = {}
+
+
 def _object(value, src: str, key: str, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
     """``value`` as a JSON object with exactly the allowed keys (all ``required`` present)."""
+    # The usual case in one set test (a library has tens of objects per holder), then the reason.
+    sets = _KEY_SETS.get((required, optional))
+    if sets is None:
+        sets = _KEY_SETS[(required, optional)] = (frozenset(required), frozenset(required + optional))
+    if type(value) is dict and value.keys() >= sets[0] and sets[1].issuperset(value):
+        return value
     if not isinstance(value, dict):
         _fail(src, key, f"must be a JSON object, got {_kind(value)}")
     unknown = [k for k in value if k not in required and k not in optional]
@@ -141,6 +152,8 @@ def _is_finite(value) -> bool:
 
 def _number(value, src: str, key: str, lo: float | None = None, lo_open: bool = True) -> float:
     """A finite JSON number, optionally above ``lo`` (strictly when ``lo_open``)."""
+    if type(value) is float and math.isfinite(value) and (lo is None or (value > lo if lo_open else value >= lo)):
+        return value  # the usual case without the checks below
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not _is_finite(value):
         shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
         _fail(src, key, f"must be a finite number, got {shown}")
@@ -296,8 +309,27 @@ def check_tool_dict(value, src: str, key: str = "tool") -> dict:
     return out
 
 
+_PARAM_VALUES = operator.itemgetter(*NAMES)
+#: Per parameter of :data:`NAMES`, a closed range inside which :meth:`HolderParams.from_dict`
+#: accepts a float (its plausible ranges; alpha strictly inside ±100 %, the factors > 0).
+_PARAM_LOW, _PARAM_HIGH = zip(*(_PLAUSIBLE_PARAMS.get(k, (-math.nextafter(100.0, 0.0), math.nextafter(100.0, 0.0)))
+                                for k in NAMES))
+_FLOAT = frozenset({float})
+
+
 def check_params(value, src: str, key: str) -> HolderParams:
     """Validate the seven holder parameters (exactly the keys of :data:`NAMES`)."""
+    # A library holds tens of sets per holder: the usual case (seven plausible floats,
+    # no other key) in one pass; anything else goes the long way, which says what is wrong.
+    if type(value) is dict and len(value) == len(NAMES):
+        try:
+            values = _PARAM_VALUES(value)
+        except KeyError:
+            values = None
+        # map() over C functions: no Python frame per value.
+        if (values is not None and _FLOAT.issuperset(map(type, values)) and all(map(operator.le, _PARAM_LOW, values))
+                and all(map(operator.le, values, _PARAM_HIGH))):
+            return HolderParams(*values)
     _object(value, src, key, NAMES)
     for k in NAMES:
         v = value[k]
