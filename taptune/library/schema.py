@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import itertools
 import math
 import operator
 import re
@@ -315,6 +316,8 @@ _PARAM_VALUES = operator.itemgetter(*NAMES)
 _PARAM_LOW, _PARAM_HIGH = zip(*(_PLAUSIBLE_PARAMS.get(k, (-math.nextafter(100.0, 0.0), math.nextafter(100.0, 0.0)))
                                 for k in NAMES))
 _FLOAT = frozenset({float})
+_DICT = frozenset({dict})
+_SEVEN = frozenset({len(NAMES)})
 
 
 def check_params(value, src: str, key: str) -> HolderParams:
@@ -339,6 +342,25 @@ def check_params(value, src: str, key: str) -> HolderParams:
         return HolderParams.from_dict(value, f"{src}: {key}")
     except InputError as err:
         raise LibraryFormatError(str(err)) from None
+
+
+def check_param_sets(values: list, src: str, key: str) -> tuple[HolderParams, ...]:
+    """:func:`check_params` of each item of the list ``values`` (named ``key[i]``).
+
+    The usual case (every item seven plausible floats and no other key) is tested for
+    all sets at once; any other list goes set by set, so a message names the set.
+    """
+    if _DICT.issuperset(map(type, values)) and _SEVEN.issuperset(map(len, values)):
+        try:
+            rows = list(map(_PARAM_VALUES, values))
+        except KeyError:
+            rows = None
+        if rows is not None:
+            flat = list(itertools.chain.from_iterable(rows))
+            if (_FLOAT.issuperset(map(type, flat)) and all(map(operator.le, itertools.cycle(_PARAM_LOW), flat))
+                    and all(map(operator.le, flat, itertools.cycle(_PARAM_HIGH)))):
+                return tuple(itertools.starmap(HolderParams, rows))
+    return tuple(check_params(p, src, f"{key}[{i}]") for i, p in enumerate(values))
 
 
 def check_date(value, src: str, key: str) -> str:
@@ -719,7 +741,7 @@ class HolderEntry:
             holder=holder,
             interface=interface,
             params=check_params(d["params"], source, "params"),
-            param_sets=tuple(check_params(p, source, f"param_sets[{i}]") for i, p in enumerate(sets)),
+            param_sets=check_param_sets(sets, source, "param_sets"),
             model_options=_plain(options, source, "model_options"),
             identifications=tuple(
                 ProvenanceRecord.from_dict(r, source, f"identifications[{i}]") for i, r in enumerate(records)

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from taptune.errors import InputError
 from taptune.io.assembly import parse_assembly
 from taptune.library import HolderEntry, HolderLibrary, LibraryFormatError, ProvenanceRecord, tool_from_dict, tool_to_dict
-from taptune.library.schema import check_params, decode, encode, parse_library
+from taptune.library.schema import check_param_sets, check_params, decode, encode, parse_library
 from taptune.model.params import NAMES, HolderParams
 from tests.library.entries import REFERENCE, make_entry, make_record
 
@@ -289,3 +289,25 @@ def test_parameter_objects_with_a_key_missing_or_extra_are_refused():
     with pytest.raises(LibraryFormatError, match="params.spare is not a known key"):
         check_params({**{k: v for k, v in BEST.items() if k != "eta_rr"}, "spare": 1.0}, "<test>", "params")
     assert [f.name for f in dataclasses.fields(HolderParams)] == list(NAMES)  # the fast path builds by position
+
+
+@pytest.mark.parametrize("key", NAMES)
+@pytest.mark.parametrize("value", EDGE_VALUES, ids=repr)
+def test_the_parameter_sets_are_checked_as_one_by_one(key, value):
+    good = make_entry().param_sets[0].to_dict()
+    sets = [good, {**BEST, key: value}, good]
+    full = [_params_outcome(lambda d: HolderParams.from_dict(d, "<test>"), s) for s in sets]
+    if all(isinstance(p, HolderParams) for p in full):
+        assert check_param_sets(sets, "<test>", "param_sets") == tuple(full)
+    else:
+        with pytest.raises(LibraryFormatError, match=rf"^<test>: param_sets\[1\]"):
+            check_param_sets(sets, "<test>", "param_sets")
+
+
+def test_parameter_sets_that_are_not_all_objects_of_seven_are_refused_naming_the_set():
+    assert check_param_sets([], "<test>", "param_sets") == ()
+    for bad, problem in (([BEST, [1.0] * 7], "param_sets\\[1\\] must be a JSON object"),
+                         ([BEST, {**BEST, "spare": 1.0}], "param_sets\\[1\\].spare is not a known key"),
+                         ([{k: v for k, v in BEST.items() if k != "alpha"} | {"spare": 1.0}], "param_sets\\[0\\].spare")):
+        with pytest.raises(LibraryFormatError, match=problem):
+            check_param_sets(bad, "<test>", "param_sets")
