@@ -400,3 +400,11 @@ def test_an_out_of_range_holder_is_refused_and_nothing_is_imported(db, tmp_path,
 def test_compacting_an_export_keeps_its_value():
     text = json.dumps({"a b": ["x\n  y", {"k": "  v  "}], "n": [1, 2.5e-300, None]}, indent=4)
     assert "\n" in text and json.loads(exchange._compact(text)) == json.loads(text)
+
+
+@pytest.mark.parametrize("chunk", [7, 300, 1 << 20])
+def test_the_holder_texts_read_in_pieces_decode_to_their_entries(tmp_path, chunk):
+    entries = {f"H{i}": make_entry(f"H{i}", records=2, first=i) for i in range(4)}
+    export_entries(entries, tmp_path / "a.json")
+    for name, entry, document in exchange._iter_holders(tmp_path / "a.json", chunk=chunk):
+        assert "\n" not in document and json.loads(document) == entry.to_dict() == entries[name].to_dict()
