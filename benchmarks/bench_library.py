@@ -100,8 +100,8 @@ def bench(kind: str, location: str, entry: HolderEntry, assembly: Path, count: i
         print("  import all        (the library holds them already: skipped)")
     else:
         wall, cpu, rss, out = run_measured("library", "import", str(export), "--library", location)
-        print(f"  import all        {wall:6.1f} s wall  {cpu:6.1f} s CPU  {rss:5.0f} MB  (bound 60 s)   "
-              f"{out.splitlines()[0][-90:]}")
+        print(f"  import all        {wall:6.1f} s wall  {cpu:6.1f} s CPU ({cpu / count * 1e3:.2f} ms per holder)  "
+              f"{rss:5.0f} MB  (bound 60 s)   {out.splitlines()[0][-90:]}")
     one = work / "one.json"
     one.unlink(missing_ok=True)
     HolderLibrary(one).put(replace(entry, name="new holder from the presetter"))

@@ -157,7 +157,9 @@ class Transaction:
     def load_many(self, names: list[str]) -> dict[str, HolderEntry]:
         return {n: e for n in names if (e := self.load(n)) is not None}
 
-    def store(self, entry: HolderEntry) -> None:  # pragma: no cover - interface
+    def store(self, entry: HolderEntry, document: str | None = None) -> None:  # pragma: no cover - interface
+        """Write ``entry``. ``document``: its JSON when the caller has it already, as text that
+        decodes to what ``entry`` was checked from (a bulk import spares the encoding)."""
         raise NotImplementedError
 
     def delete(self, name: str) -> None:  # pragma: no cover - interface

@@ -73,6 +73,24 @@ def iter_library_file(path: str | os.PathLike, chunk: int = _CHUNK):
     LibraryFormatError naming the file when it is reached, so a caller that writes while
     iterating must do it in a transaction it can roll back.
     """
+    for name, entry, _ in _iter_holders(path, chunk):
+        yield name, entry
+
+
+def _compact(text: str) -> str:
+    """JSON ``text`` without the indentation after each line break.
+
+    A JSON string holds no raw line break and valid JSON never puts two values side by
+    side, so what follows a line break is whitespace between tokens: the text decodes to
+    the same value.
+    """
+    return "".join(map(str.lstrip, text.split("\n")))
+
+
+def _iter_holders(path: str | os.PathLike, chunk: int = _CHUNK):
+    """(name, entry, document) of :func:`iter_library_file`; ``document`` the holder's JSON
+    text as in the file (indentation removed: :func:`_compact`), which decodes to what the
+    entry was checked from, so a database can store it without encoding the entry again."""
     from taptune.library.schema import VERSION, _reject_constant, _unique_keys
 
     path = Path(path)
@@ -126,6 +144,7 @@ def iter_library_file(path: str | os.PathLike, chunk: int = _CHUNK):
         return c
 
     def value():
+        """The JSON value that starts here; its text (from the buffer) in ``state["text"]``."""
         skip_ws()
         while True:
             try:
@@ -138,6 +157,7 @@ def iter_library_file(path: str | os.PathLike, chunk: int = _CHUNK):
                 bad(str(err))
             if end == len(state["buf"]) and more():
                 continue  # a number may go on in the next piece
+            state["text"] = (state["buf"], state["pos"], end)
             state["pos"] = end
             return obj
 
@@ -189,7 +209,8 @@ def iter_library_file(path: str | os.PathLike, chunk: int = _CHUNK):
                 entry = HolderEntry.from_dict(value(), where)
                 if entry.name != name:
                     raise LibraryFormatError(f"{where}: name {entry.name!r} differs from its key in \"holders\"")
-                yield name, entry
+                buf, start, end = state["text"]
+                yield name, entry, _compact(buf[start:end])
         if skip_ws() != "":
             bad("more after the end of the document")
         missing = [k for k in ("schema", "version", "holders") if k not in head]
@@ -402,33 +423,38 @@ def import_library(lib, file: str | os.PathLike, replace: bool = False) -> Impor
     except OSError:
         size = 0
     streamed = size > WHOLE_FILE_BYTES and hasattr(lib, "export_version")
-    holders = iter_library_file(file) if streamed else iter(read_library_file(file).items())
+    holders = (_iter_holders(file) if streamed
+               else ((name, entry, None) for name, entry in read_library_file(file).items()))
     parts: list[ImportReport] = []
     with lib._transaction() as tx:
         while True:
-            batch = dict(itertools.islice(holders, 1000))
+            batch = list(itertools.islice(holders, 1000))
             if not batch:
                 break
-            parts.append(_merge_batch(tx, batch, replace, file))
+            parts.append(_merge_batch(tx, {name: entry for name, entry, _ in batch}, replace, file,
+                                      {name: document for name, _, document in batch if document is not None}))
     return ImportReport(str(file), *(tuple(sorted(n for p in parts for n in getattr(p, k)))
                                      for k in ("added", "merged", "skipped")),
                         tuple(sorted((c for p in parts for c in p.conflicts), key=lambda c: c.name)),
                         bool(replace and any(p.conflicts for p in parts)))
 
 
-def _merge_batch(tx, theirs: dict[str, HolderEntry], replace: bool, file) -> ImportReport:
+def _merge_batch(tx, theirs: dict[str, HolderEntry], replace: bool, file, documents: dict[str, str]) -> ImportReport:
+    """Merge one batch of read holders; ``documents`` their JSON texts where the reader kept them."""
     current = tx.load_many(sorted(theirs))
     for name, entry in theirs.items():
         # A read keeps an implausible holder (with a warning); the library takes no new
         # one, but one it already holds unchanged (an export of itself) is no reason to refuse.
+        # Only an entry with a warning from its read (HolderEntry.from_dict) can be one.
         mine = current.get(name)
-        if mine is None or (replace and mine.holder != entry.holder):
+        if entry.warnings and (mine is None or (replace and mine.holder != entry.holder)):
             refuse_implausible(entry, f"{file}: holder {name!r}", "nothing was imported")
     merged = dict(current)
     report = merge_entries(merged, theirs, replace, source=str(file))
     for name, entry in merged.items():
         if current.get(name) != entry:
-            tx.store(entry)
+            # The file's text only for a holder taken as it was read (not merged with ours).
+            tx.store(entry, documents.get(name) if entry is theirs.get(name) else None)
     return report
 
 

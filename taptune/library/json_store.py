@@ -25,7 +25,6 @@ from typing import Iterable, Iterator
 
 from taptune.errors import LibraryError
 from taptune.io.atomic import atomic_write_bytes, check_writable, remove_stale_temporaries
-from taptune.library.exchange import read_library_file
 from taptune.library.schema import HolderEntry, encode
 from taptune.library.base import HolderLibrary, HolderSummary, Transaction, matches, register
 
@@ -74,7 +73,7 @@ class _DictTransaction(Transaction):
     def load(self, name):
         return self.holders.get(name)
 
-    def store(self, entry):
+    def store(self, entry, document=None):
         self.holders[entry.name] = entry
 
     def delete(self, name):
@@ -109,6 +108,8 @@ class JsonLibrary(HolderLibrary):
     # ---- reading
 
     def _read(self) -> dict[str, HolderEntry]:
+        from taptune.library.exchange import read_library_file  # not loaded for a database library
+
         return read_library_file(self.path, missing_ok=True)
 
     def entries(self) -> dict[str, HolderEntry]:

@@ -42,7 +42,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import itertools
 import math
+import operator
 import re
 from dataclasses import dataclass, field, replace
 from datetime import datetime, timezone
@@ -66,7 +68,7 @@ from taptune.io.assembly import (
     validate_holder,
 )
 from taptune.library.observations import CutObservation, ObservationError
-from taptune.model.params import NAMES, HolderParams
+from taptune.model.params import _PLAUSIBLE, NAMES, HolderParams
 
 SCHEMA = "taptune-holder-library"
 #: The newest format this build reads and writes. Version 2 added the ``checks`` history,
@@ -94,6 +96,7 @@ PARAM_UNITS = {
     "modulus_factor": "-",
 }
 
+_PLAUSIBLE_PARAMS = {k: (lo, hi) for k, lo, hi in _PLAUSIBLE}
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
 _CONTROL = re.compile(r"[\x00-\x1f]")
 _MAX_NAME = NAME_MAX_LEN  # what an assembly file may name
@@ -123,8 +126,17 @@ def _fail(src: str, key: str, problem: str):
     raise LibraryFormatError(f"{src}: {key} {problem}")
 
 
+_KEY_SETS: dict[tuple, tuple[frozenset, frozenset]] = {}
+
+
 def _object(value, src: str, key: str, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
     """``value`` as a JSON object with exactly the allowed keys (all ``required`` present)."""
+    # The usual case in one set test (a library has tens of objects per holder), then the reason.
+    sets = _KEY_SETS.get((required, optional))
+    if sets is None:
+        sets = _KEY_SETS[(required, optional)] = (frozenset(required), frozenset(required + optional))
+    if type(value) is dict and value.keys() >= sets[0] and sets[1].issuperset(value):
+        return value
     if not isinstance(value, dict):
         _fail(src, key, f"must be a JSON object, got {_kind(value)}")
     unknown = [k for k in value if k not in required and k not in optional]
@@ -146,6 +158,8 @@ def _is_finite(value) -> bool:
 
 def _number(value, src: str, key: str, lo: float | None = None, lo_open: bool = True) -> float:
     """A finite JSON number, optionally above ``lo`` (strictly when ``lo_open``)."""
+    if type(value) is float and math.isfinite(value) and (lo is None or (value > lo if lo_open else value >= lo)):
+        return value  # the usual case without the checks below
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not _is_finite(value):
         shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
         _fail(src, key, f"must be a finite number, got {shown}")
@@ -301,8 +315,29 @@ def check_tool_dict(value, src: str, key: str = "tool") -> dict:
     return out
 
 
+_PARAM_VALUES = operator.itemgetter(*NAMES)
+#: Per parameter of :data:`NAMES`, a closed range inside which :meth:`HolderParams.from_dict`
+#: accepts a float (its plausible ranges; alpha strictly inside ±100 %, the factors > 0).
+_PARAM_LOW, _PARAM_HIGH = zip(*(_PLAUSIBLE_PARAMS.get(k, (-math.nextafter(100.0, 0.0), math.nextafter(100.0, 0.0)))
+                                for k in NAMES))
+_FLOAT = frozenset({float})
+_DICT = frozenset({dict})
+_SEVEN = frozenset({len(NAMES)})
+
+
 def check_params(value, src: str, key: str) -> HolderParams:
     """Validate the seven holder parameters (exactly the keys of :data:`NAMES`)."""
+    # A library holds tens of sets per holder: the usual case (seven plausible floats,
+    # no other key) in one pass; anything else goes the long way, which says what is wrong.
+    if type(value) is dict and len(value) == len(NAMES):
+        try:
+            values = _PARAM_VALUES(value)
+        except KeyError:
+            values = None
+        # map() over C functions: no Python frame per value.
+        if (values is not None and _FLOAT.issuperset(map(type, values)) and all(map(operator.le, _PARAM_LOW, values))
+                and all(map(operator.le, values, _PARAM_HIGH))):
+            return HolderParams(*values)
     _object(value, src, key, NAMES)
     for k in NAMES:
         v = value[k]
@@ -312,6 +347,25 @@ def check_params(value, src: str, key: str) -> HolderParams:
         return HolderParams.from_dict(value, f"{src}: {key}")
     except InputError as err:
         raise LibraryFormatError(str(err)) from None
+
+
+def check_param_sets(values: list, src: str, key: str) -> tuple[HolderParams, ...]:
+    """:func:`check_params` of each item of the list ``values`` (named ``key[i]``).
+
+    The usual case (every item seven plausible floats and no other key) is tested for
+    all sets at once; any other list goes set by set, so a message names the set.
+    """
+    if _DICT.issuperset(map(type, values)) and _SEVEN.issuperset(map(len, values)):
+        try:
+            rows = list(map(_PARAM_VALUES, values))
+        except KeyError:
+            rows = None
+        if rows is not None:
+            flat = list(itertools.chain.from_iterable(rows))
+            if (_FLOAT.issuperset(map(type, flat)) and all(map(operator.le, itertools.cycle(_PARAM_LOW), flat))
+                    and all(map(operator.le, flat, itertools.cycle(_PARAM_HIGH)))):
+                return tuple(itertools.starmap(HolderParams, rows))
+    return tuple(check_params(p, src, f"{key}[{i}]") for i, p in enumerate(values))
 
 
 def check_date(value, src: str, key: str) -> str:
@@ -701,7 +755,7 @@ class HolderEntry:
             holder=holder,
             interface=interface,
             params=check_params(d["params"], source, "params"),
-            param_sets=tuple(check_params(p, source, f"param_sets[{i}]") for i, p in enumerate(sets)),
+            param_sets=check_param_sets(sets, source, "param_sets"),
             model_options=_plain(options, source, "model_options"),
             identifications=tuple(
                 ProvenanceRecord.from_dict(r, source, f"identifications[{i}]") for i, r in enumerate(records)

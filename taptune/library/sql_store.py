@@ -45,6 +45,8 @@ META_TABLE = "taptune_library"
 SQLITE_HEADER = b"SQLite format 3\x00"
 #: Key of PostgreSQL's advisory lock that serialises the library's writers ("taptune" in ASCII, folded).
 PG_LOCK_KEY = 0x7461_7074
+#: Size the WAL file is cut back to after a checkpoint [bytes].
+WAL_LIMIT_BYTES = 64 << 20
 _SUMMARY = ("name", "interface", "k_tt", "k_rr", "identifications", "last_identified", "checks",
             "last_checked", "last_verdict", "warnings")
 
@@ -88,10 +90,12 @@ def entry_format(entry: HolderEntry) -> int:
     return library_version([entry])
 
 
-def entry_row(entry: HolderEntry) -> tuple[tuple, str, list[str]]:
-    """(holders row, document JSON, recording hashes) of an entry."""
+def entry_row(entry: HolderEntry, document: str | None = None) -> tuple[tuple, str, list[str]]:
+    """(holders row, document JSON, recording hashes) of an entry; ``document`` if given (see
+    :meth:`~taptune.library.base.Transaction.store`), else the entry encoded."""
     s = HolderSummary.of(entry)
-    document = json.dumps(entry.to_dict(), ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    if document is None:
+        document = json.dumps(entry.to_dict(), ensure_ascii=False, allow_nan=False, separators=(",", ":"))
     row = (s.name, s.name.casefold(), s.interface, s.k_tt, s.k_rr, s.identifications, s.last_identified, s.checks,
            s.last_checked, s.last_verdict, "\n".join(s.warnings), entry_format(entry), utc_now())
     return row, document, sorted({r.sha256 for r in entry.identifications})
@@ -119,8 +123,8 @@ class _SqlTransaction(Transaction):
     def load_many(self, names):
         return self.lib._documents(self.cursor, names)
 
-    def store(self, entry):
-        row, document, hashes = entry_row(entry)
+    def store(self, entry, document=None):
+        row, document, hashes = entry_row(entry, document)
         q = self.lib._q
         self.cursor.execute(q(_UPSERT_HOLDER), row)
         self.cursor.execute(q(_UPSERT_DOCUMENT), (entry.name, document))
@@ -401,6 +405,9 @@ class SqliteLibrary(SqlLibrary):
                 if ready and conn.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
                     conn.execute("PRAGMA journal_mode = WAL")
                 conn.execute("PRAGMA synchronous = FULL")
+                # A bulk import writes its whole transaction (up to ~1 GB) to the WAL: after
+                # the checkpoint the file shrinks back to this size instead of keeping that one.
+                conn.execute(f"PRAGMA journal_size_limit = {WAL_LIMIT_BYTES}")
         except BaseException:
             conn.close()
             raise

@@ -367,3 +367,44 @@ def test_a_server_user_without_rights_gets_one_line_and_no_empty_library(postgre
             action(HolderLibrary(stranger))
         assert str(info.value).startswith("postgresql://stranger@") and "\n" not in str(info.value)
     assert HolderLibrary(url).names() == ["A"]
+
+
+@pytest.mark.parametrize("streamed", [False, True])
+def test_an_imported_export_reads_back_and_exports_to_the_same_bytes(db, tmp_path, monkeypatch, streamed):
+    # Streamed, each holder is stored as the file's text (indentation removed), not encoded again.
+    if streamed:
+        monkeypatch.setattr(exchange, "WHOLE_FILE_BYTES", 0)
+    entries = {n: replace(make_entry(n, records=2, first=i), checks=(a_check(i),) if i else ())
+               for i, n in enumerate(["Ä holder \\n \"quoted\"", "B", "zz"])}
+    export_entries(entries, tmp_path / "all.json")
+    assert db.import_file(tmp_path / "all.json").added == tuple(sorted(entries))
+    assert db.entries() == entries
+    db.export(tmp_path / "again.json")
+    assert (tmp_path / "again.json").read_bytes() == (tmp_path / "all.json").read_bytes()
+
+
+@pytest.mark.parametrize("streamed", [False, True])
+def test_an_out_of_range_holder_is_refused_and_nothing_is_imported(db, tmp_path, monkeypatch, streamed):
+    if streamed:
+        monkeypatch.setattr(exchange, "WHOLE_FILE_BYTES", 0)
+    db.put(make_entry("A"))
+    export_entries({n: make_entry(n) for n in ("B", "C", "D")}, tmp_path / "all.json")
+    doc = json.loads((tmp_path / "all.json").read_text())
+    doc["holders"]["C"]["holder"]["segments"][0]["length"] = 5e6
+    (tmp_path / "bad.json").write_text(json.dumps(doc, indent=2))
+    with pytest.raises(LibraryFormatError, match=r"holder 'C': \[holder\] segments\[1\].length .* nothing was imported$"):
+        db.import_file(tmp_path / "bad.json")
+    assert db.names() == ["A"]
+
+
+def test_compacting_an_export_keeps_its_value():
+    text = json.dumps({"a b": ["x\n  y", {"k": "  v  "}], "n": [1, 2.5e-300, None]}, indent=4)
+    assert "\n" in text and json.loads(exchange._compact(text)) == json.loads(text)
+
+
+@pytest.mark.parametrize("chunk", [7, 300, 1 << 20])
+def test_the_holder_texts_read_in_pieces_decode_to_their_entries(tmp_path, chunk):
+    entries = {f"H{i}": make_entry(f"H{i}", records=2, first=i) for i in range(4)}
+    export_entries(entries, tmp_path / "a.json")
+    for name, entry, document in exchange._iter_holders(tmp_path / "a.json", chunk=chunk):
+        assert "\n" not in document and json.loads(document) == entry.to_dict() == entries[name].to_dict()

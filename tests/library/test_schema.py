@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
+import math
 import pickle
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from taptune.errors import InputError
 from taptune.io.assembly import parse_assembly
 from taptune.library import HolderEntry, HolderLibrary, LibraryFormatError, ProvenanceRecord, tool_from_dict, tool_to_dict
-from taptune.library.schema import decode, encode, parse_library
-from taptune.model.params import HolderParams
+from taptune.library.schema import check_param_sets, check_params, decode, encode, parse_library
+from taptune.model.params import NAMES, HolderParams
 from tests.library.entries import REFERENCE, make_entry, make_record
 
 
@@ -251,3 +254,60 @@ def test_any_valid_library_round_trips_bit_for_bit(names, best, sets):
     again = parse_library(decode(raw, "<test>"), "<test>")
     assert again == entries
     assert encode(again, "<test>") == raw
+
+
+# --------------------------------------------------------------------------- the fast checks
+
+BEST = make_entry().params.to_dict()
+EDGE_VALUES = [1e2, 1e12, 99.0, 1.0, 1e7, 0.0, 0.1, 10.0, 0.5, -0.0, math.nextafter(1e12, math.inf), 0.09999999,
+               math.nextafter(100.0, 0.0), 100.0, -100.0, math.nextafter(-100.0, 0.0), 150.0, -1.0, 1e300, math.inf,
+               -math.inf, math.nan, 5, 0, True, None, "1.0", 10**400]
+
+
+def _params_outcome(check, data):
+    try:
+        return check(data)
+    except (LibraryFormatError, InputError) as err:
+        return str(err).rsplit(": ", 1)[-1]  # the problem, without the source each check names its own way
+
+
+@pytest.mark.parametrize("key", NAMES)
+@pytest.mark.parametrize("value", EDGE_VALUES, ids=repr)
+def test_the_fast_parameter_check_accepts_and_refuses_what_the_full_check_does(key, value):
+    data = {**BEST, key: value}
+    fast = _params_outcome(lambda d: check_params(d, "<test>", "params"), data)
+    full = _params_outcome(lambda d: HolderParams.from_dict(d, "<test>: params"), data)
+    if isinstance(full, HolderParams):
+        assert fast == full and all(type(v) is float for v in fast.to_dict().values())
+    else:
+        assert not isinstance(fast, HolderParams), f"{key} = {value!r} passed the fast check only"
+
+
+def test_parameter_objects_with_a_key_missing_or_extra_are_refused():
+    with pytest.raises(LibraryFormatError, match="params.eta_rr is missing"):
+        check_params({k: v for k, v in BEST.items() if k != "eta_rr"}, "<test>", "params")
+    with pytest.raises(LibraryFormatError, match="params.spare is not a known key"):
+        check_params({**{k: v for k, v in BEST.items() if k != "eta_rr"}, "spare": 1.0}, "<test>", "params")
+    assert [f.name for f in dataclasses.fields(HolderParams)] == list(NAMES)  # the fast path builds by position
+
+
+@pytest.mark.parametrize("key", NAMES)
+@pytest.mark.parametrize("value", EDGE_VALUES, ids=repr)
+def test_the_parameter_sets_are_checked_as_one_by_one(key, value):
+    good = make_entry().param_sets[0].to_dict()
+    sets = [good, {**BEST, key: value}, good]
+    full = [_params_outcome(lambda d: HolderParams.from_dict(d, "<test>"), s) for s in sets]
+    if all(isinstance(p, HolderParams) for p in full):
+        assert check_param_sets(sets, "<test>", "param_sets") == tuple(full)
+    else:
+        with pytest.raises(LibraryFormatError, match=rf"^<test>: param_sets\[1\]"):
+            check_param_sets(sets, "<test>", "param_sets")
+
+
+def test_parameter_sets_that_are_not_all_objects_of_seven_are_refused_naming_the_set():
+    assert check_param_sets([], "<test>", "param_sets") == ()
+    for bad, problem in (([BEST, [1.0] * 7], "param_sets\\[1\\] must be a JSON object"),
+                         ([BEST, {**BEST, "spare": 1.0}], "param_sets\\[1\\].spare is not a known key"),
+                         ([{k: v for k, v in BEST.items() if k != "alpha"} | {"spare": 1.0}], "param_sets\\[0\\].spare")):
+        with pytest.raises(LibraryFormatError, match=problem):
+            check_param_sets(bad, "<test>", "param_sets")
