@@ -197,4 +197,8 @@ class TaskRunner(QObject):
         for task in list(self._tasks):
             task.cancel()
         for task in list(self._tasks):
-            task.wait(ms)
+            # A computation inside numpy cannot be stopped, and a QThread destroyed while it
+            # runs aborts the whole app (seen: the Machine view closed while the lobes'
+            # band was computed): past ``ms`` wait for it to end rather than crash.
+            if not task.wait(ms):
+                task.thread.wait()
