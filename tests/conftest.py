@@ -20,7 +20,7 @@ atexit.register(shutil.rmtree, os.environ["TAPTUNE_CACHE_DIR"], True)
 import pytest  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
-# The example assembly of ASSEMBLY-FORMAT.md / the reference assembly of MODEL.md §13.4.
+# The example assembly of docs/assembly-format.md (the reference assembly of the tests).
 REFERENCE_TOML = """
 [holder]
 name = "ER32 collet chuck HSK-A63 x 100"
@@ -46,7 +46,7 @@ stickout = 53.5
 
 @pytest.fixture
 def reference_toml(tmp_path) -> Path:
-    """The reference assembly (MODEL.md §13.4) written to a temporary file."""
+    """The reference assembly (the example of docs/assembly-format.md) written to a temporary file."""
     path = tmp_path / "reference.toml"
     path.write_text(REFERENCE_TOML)
     return path

@@ -1,8 +1,8 @@
 """The batch engine: discovery, pairing, result names, skip-by-hash, isolation of failures.
 
 The end-to-end runs (real identifications in worker processes) use tap recordings
-synthesised from the model (:mod:`taptune.synthetic`; reference assembly of MODEL.md
-§13.4, nominal holder) with a tiny optimiser budget: they check the machinery, not the
+synthesised from the model (:mod:`taptune.synthetic`; reference assembly of
+docs/assembly-format.md, nominal holder) with a tiny optimiser budget: they check the machinery, not the
 accuracy of the fit.
 """
 

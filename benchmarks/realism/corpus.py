@@ -17,7 +17,7 @@ flute_ratio 0.8); the TRUTH differs in several ways at once (see :data:`KINDS`):
 * ``lowgrade`` a phone-like recording: 44.1 kHz, 16 bit, a steep low-pass at 15–17 kHz,
   20–30 dB SNR.
 
-The holder's own parameters are drawn inside the published ranges of MODEL.md §8.1.
+The holder's own parameters are drawn inside the published ranges of docs/physics.md §2.
 Queries: the same tool at other described stick-outs (+10/+20 mm, or −10 mm where the tool
 cannot come out further), with the truth's bending frequencies there.
 
@@ -188,7 +188,7 @@ def _loguniform(rng, lo, hi) -> float:
 
 
 def draw_params(rng) -> HolderParams:
-    """Holder parameters inside the published ranges of MODEL.md §8.1 (five real holders)."""
+    """Holder parameters inside the published ranges of docs/physics.md §2 (five real holders)."""
     return HolderParams(
         k_tt=_loguniform(rng, 1.8e9, 4.7e9),
         k_rr=_loguniform(rng, 2.95e3, 4.83e4),

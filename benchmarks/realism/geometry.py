@@ -77,7 +77,7 @@ def make_holder(family: Family, d: float, name: str, od_factors=None) -> Holder:
 
 
 def make_tool(d: float, total: float, flute: float, ratio: float = 0.8) -> Tool:
-    """A solid carbide end mill [mm in, SI out] modelled as shank + fluted cylinder (MODEL.md §1.2)."""
+    """A solid carbide end mill [mm in, SI out] modelled as shank + fluted cylinder (docs/assembly-format.md)."""
     return Tool(
         name=f"solid carbide end mill D{d:g} x {total:g}",
         total_length=total * MM,

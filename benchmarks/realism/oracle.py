@@ -12,7 +12,7 @@ No audio, no peak picking, no labels, no optimiser budget: what is left is what 
 model and the description errors (profile, diameters, flute, hidden mass, doublet,
 ruler) cost.
 
-Three frequencies do not fix seven parameters (MODEL.md §8.6): the exact fits form a
+Three frequencies do not fix seven parameters (docs/physics.md §5): the exact fits form a
 valley, and their predictions at other stick-outs differ (by up to 10 % even in the
 in-family control). The oracle's prediction is the exact fit nearest the pipeline's own
 choice (the fit started from the pipeline's best parameter set, else the valley member

@@ -1,6 +1,6 @@
 """A truth model outside taptune's model family: what a real holder does that the model cannot.
 
-Physically the same free-free Timoshenko beams as MODEL.md §1–§7 (taptune's own mesh and
+Physically the same free-free Timoshenko beams as docs/physics.md §1–§3 (taptune's own mesh and
 elements on the TRUE geometry, every element halved so the truth is mesh-converged
 beyond the product), but with what the product's model leaves out:
 
@@ -8,7 +8,7 @@ beyond the product), but with what the product's model leaves out:
   (the intensity ramps up over the first 15–30 % of the grip), a crowned bore (stiffer in
   the middle) or a relief gap, on top of the product's linear slope α. The contact
   matrices are built for the arbitrary profile by Gauss quadrature (12 points per
-  element) over the element interpolation of MODEL.md §3.6, with the same complex
+  element) over the Friedman & Kosmatka (1993) element interpolation, with the same complex
   stiffness form k(1 + i·10·eta) as the product;
 * a lumped mass with rotary inertia the assembly file leaves out (a collet-chuck nut, a
   coolant tube or clamping unit in the HSK bore), spread over the holder nodes it covers;
@@ -18,7 +18,7 @@ beyond the product), but with what the product's model leaves out:
 
 The profile is a property of the holder bore: its shape is a function of the distance
 from the holder's front face over the holder's clamp length (normalised to mean 1 there),
-while α follows the product's convention (MODEL.md §5.1: it spans the actual contact zone).
+while α follows the product's convention (docs/physics.md §1: it spans the actual contact zone).
 With ``Profile("linear")``, no mass and no asymmetry the truth IS the product model (to
 the 0.05 % of its mesh convergence): tests/realism checks that.
 
@@ -141,7 +141,7 @@ class TruthHolder:
     ----------
     params : HolderParams
         Intensities at the zone middle (before the profile), loss, α and the two holder
-        factors (MODEL.md §8.1 units).
+        factors (docs/physics.md §2 units).
     profile : Profile
     extra_mass : ExtraMass
     asymmetry : float
@@ -196,7 +196,7 @@ def profile_contact(fe: FEModel, mesh, assembly: Assembly, holder: TruthHolder):
     """Translational and rotational contact matrices for the profile, per unit line stiffness.
 
     K_c = c_t·T + c_r·R with T = ∫ s(ξ)·g(d) B_wᵀB_w dz, R likewise with B_θ, where
-    s = 1 + α/100·ξ over the actual zone (MODEL.md §5.1) and g the holder's profile.
+    s = 1 + α/100·ξ over the actual zone (docs/physics.md §1) and g the holder's profile.
 
     Returns
     -------
@@ -320,10 +320,10 @@ def truth_receptance(assembly: Assembly, holder: TruthHolder, freq_hz, method: s
     freq_hz : ndarray, shape (m,)
         Frequencies [Hz] (0 allowed: set to 0, the rigid-body line is undefined there).
     method : {"modal", "direct"}
-        ``"direct"`` solves (K̃ − ω²M) x = e_tip per frequency (MODEL.md §7.4, the
+        ``"direct"`` solves (K̃ − ω²M) x = e_tip per frequency (the
         reference; ≈ 0.25 ms per frequency, 6 CPU-s for a 1-Hz grid to 24 kHz);
         ``"modal"`` sums the 20 lowest modes plus the first-order residual of the rest
-        (§7.3; tests/realism checks it against the direct solve), for the recordings.
+        (docs/physics.md §3; tests/realism checks it against the direct solve), for the recordings.
     f_cap_hz : float
         Above this (beyond every microphone and the tap's force spectrum) the receptance
         is tapered to zero over 1 kHz instead of solved.

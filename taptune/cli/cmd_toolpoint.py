@@ -1,6 +1,6 @@
 """``taptune toolpoint ASSEMBLY (--holder NAME | --params JSON) --machine MACHINE.toml [...]``.
 
-The tool-point FRF on the machine (MODEL.md §10, MACHINE.md): the holder's free-free
+The tool-point FRF on the machine (docs/machine.md): the holder's free-free
 model with the library's or the given parameters, cut at the coupling plane and rigidly
 coupled to the measured spindle receptance. The helpers here (arguments, the frequency
 grid, the holder and machine inputs) are shared with ``taptune lobes``.

@@ -5,7 +5,7 @@ per mode, in Hz::
 
     half_width = sqrt(set² + geometry² + model_form²)
 
-* **set** — the near-optimal parameter sets (MODEL.md §8.6): the largest deviation of any
+* **set** — the near-optimal parameter sets (docs/physics.md §5): the largest deviation of any
   of them from the best fit, at least the fit's own misfit (≥ 0.05 %). What the tap
   cannot tell apart.
 * **geometry** — the user's stated tolerances (optional assembly keys, see

@@ -52,7 +52,7 @@ import numpy as np
 # trusted: a codec's transition band bends their peaks (the analysis' own rule).
 from taptune.signal.bandwidth import EDGE_MARGIN
 
-#: The measured peaks are known to 0.05 % at best (MODEL.md §8.3), whatever their scatter.
+#: The measured peaks are known to 0.05 % at best (the fit's floor, docs/physics.md §5), whatever their scatter.
 MEASUREMENT_FLOOR = 5e-4
 #: The band's half-width in standard deviations of the prediction error: it holds the
 #: truth in 90 % of predictions (bands.COVERAGE), the two-sided normal 90 % point.

@@ -8,7 +8,7 @@ The scikit-learn-like contract of taptune::
 ``identify`` runs several independent genetic-algorithm "islands" (seeded from one
 master seed, in parallel processes when allowed), polishes each best by least squares (Gauss–Newton), and
 keeps every candidate whose objective is close to the best: the parameters of this
-model are not all identifiable from three frequencies and one peak shape (MODEL.md §8.6),
+model are not all identifiable from three frequencies and one peak shape (docs/physics.md §5),
 but the predictions are, and their spread over the near-optimal set is the honest
 uncertainty that ``predict`` reports.
 """
@@ -45,7 +45,7 @@ class IdentifyOptions:
     polish_band: float = 2.0  # archive points this far above J_min may start a polish
     objective: ObjectiveOptions = ObjectiveOptions()
     model: object | None = None  # taptune.model.ModelOptions; None = defaults
-    # Near-optimal set (the uncertainty, MODEL.md §8.6), term by term against the best fit:
+    # Near-optimal set (the uncertainty, docs/physics.md §5), term by term against the best fit:
     # the frequency term may exceed the best's by near_frequency per measured mode (≈ the
     # 0.05 % the peaks are measured to); the shape term, dominated by the systematic
     # difference between the sound and the tip receptance (radiation, microphone), may
@@ -100,7 +100,7 @@ class Identification:
         return {n: float((values[:, i].max() - values[:, i].min()) / 2) for i, n in enumerate(NAMES)}
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (CLI-CONTRACT.md keys for one recording; lists per recording for joint fits)."""
+        """JSON-ready dictionary (docs/cli.md keys for one recording; lists per recording for joint fits)."""
         single = len(self.bending_measured_hz) == 1
 
         def pick(x):
@@ -296,8 +296,8 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
 
     The first set is the best fit and gives the values. The ± half-width
     (``bending_hz_spread``) is the honest band of :mod:`taptune.identify.bands`:
-    the near-optimal sets' spread (every set explains the measurement as well, MODEL.md
-    §8.6; never less than ``relative_floor`` × f, the fit's misfit, see
+    the near-optimal sets' spread (every set explains the measurement as well, docs/physics.md
+    §5; never less than ``relative_floor`` × f, the fit's misfit, see
     :func:`fit_misfit`), the stated geometry tolerances propagated through the model,
     and the calibrated model-form term, combined in quadrature.
 

@@ -26,7 +26,7 @@ from taptune.signal.labels import (LabelOptions, Labeling, apply_labels, label_c
                                    loud_peaks, missing_warnings, ranked_labelings)
 
 #: Plausible spread of each frequency-setting holder parameter around the nominal
-#: values (MODEL.md §8.1): (name, step); k_tt and k_rr in decades, alpha in %, the
+#: values (docs/physics.md §2): (name, step); k_tt and k_rr in decades, alpha in %, the
 #: factors absolute. The published holders lie within about one spread. The labels'
 #: guidance uses how far each bending mode moves per spread
 #: (:func:`taptune.identify.pipeline.model_expectation`); the fit here, as its prior.
@@ -332,7 +332,7 @@ def choose_labeling(analysis, evaluator_of, guidance, bands=(), label_options: L
         choices.append(LabelChoice(lab, score, tuple(map(float, model_hz)), float(misfit)))
     choices.sort(key=lambda c: c.score)
     # A prominent peak outside the interface bands, where a mode is missing, is not
-    # dropped because the nominal guidance expected the mode elsewhere (MODEL.md §8.3):
+    # dropped because the nominal guidance expected the mode elsewhere (docs/physics.md §4):
     # when some plausible labeling explains every such peak, the choice is among those.
     allowed = [c for c in choices if c.labeling.unexplained == 0] or choices
     best = allowed[0]

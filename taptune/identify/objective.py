@@ -1,4 +1,4 @@
-"""The identification objective of MODEL.md §8.4.
+"""The identification objective of docs/physics.md §4.
 
     J(p) = Σ_n [(f_n(p) − f_n^meas) / (σ_f f_n^meas)]²  +  (1/σ_s²) · mean_k [Ŝ(f_k) − Ĥ(f_k; p)]²
 
@@ -19,7 +19,7 @@ from taptune.errors import InputError
 
 @dataclass(frozen=True)
 class ObjectiveOptions:
-    """Weights and variants of the objective (MODEL.md §8.4 defaults)."""
+    """Weights and variants of the objective (docs/physics.md §4 defaults)."""
 
     sigma_f: float = 0.005  # relative frequency tolerance
     sigma_s: float = 0.05  # RMS shape tolerance (normalised units)

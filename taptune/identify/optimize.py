@@ -1,7 +1,7 @@
 """Optimisers on the unit cube [0, 1]^d: a real-coded genetic algorithm and a local polish.
 
-MODEL.md §8.5: tournament selection, simulated binary crossover (SBX), polynomial
-mutation, elitism, a seeded :class:`numpy.random.Generator`; then a bounded local
+The real-coded GA of docs/physics.md §4 (after Deb & Agrawal 1995): tournament selection,
+simulated binary crossover (SBX), polynomial mutation, elitism, a seeded :class:`numpy.random.Generator`; then a bounded local
 polish from the GA's best: :func:`polish_least_squares` (Gauss–Newton on the residual
 vector of J; it beat nlopt's BOBYQA, which needed ≈ 250 evaluations for what it reaches
 in ≈ 120). Every evaluated point is kept in an archive, because the near-optimal set is
@@ -22,7 +22,7 @@ class Cancelled(Exception):
 
 @dataclass(frozen=True)
 class GAOptions:
-    """Settings of the genetic algorithm (MODEL.md §8.5 ranges)."""
+    """Settings of the genetic algorithm (docs/physics.md §4)."""
 
     population: int = 48
     generations: int = 30
@@ -34,7 +34,7 @@ class GAOptions:
     elite: int = 2
     patience: int = 10  # stop after this many generations without improvement …
     tolerance: float = 1e-3  # … by more than tolerance × best + tolerance_abs
-    # J counts tolerances squared (MODEL.md §8.4): gains below 0.005 change no prediction.
+    # J counts tolerances squared (docs/physics.md §4): gains below 0.005 change no prediction.
     tolerance_abs: float = 5e-3
 
 
@@ -163,7 +163,7 @@ def polish_least_squares(
 ) -> tuple[np.ndarray, float, int]:
     """Bounded Gauss–Newton polish (trust-region reflective least squares) on the unit cube.
 
-    J is a sum of squared residuals (MODEL.md §8.4), so a Gauss–Newton step from a
+    J is a sum of squared residuals (docs/physics.md §4), so a Gauss–Newton step from a
     finite-difference Jacobian (d + 1 evaluations) goes about as far as a derivative-free
     method gets in a hundred. ``diff_step`` is the finite-difference step in unit-cube
     coordinates: far above the reduced model's solver noise (relative 1e-6 in λ).

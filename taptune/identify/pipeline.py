@@ -1,8 +1,8 @@
 """The steps every front end runs in the same order: recording → labelled spectrum → fit.
 
 The signal layer never imports the model, so the model's expectations (bending
-frequencies with nominal or library parameters, and the physical bounds of MODEL.md
-§7.6) are computed here and handed to ``analyse_recording`` as plain arrays.
+frequencies with nominal or library parameters, and the physical bounds from
+``bending_bounds``) are computed here and handed to ``analyse_recording`` as plain arrays.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def model_expectation(assembly, params: HolderParams | None = None, model_option
     expected : ndarray, shape (3,)
         Bending frequencies [Hz] with ``params`` (nominal by default).
     bounds : ndarray, shape (3, 2)
-        Their physical bounds [Hz] (MODEL.md §7.6).
+        Their physical bounds [Hz] (``bending_bounds``).
     spread : ndarray, shape (3, len(PARAMETER_SPREAD))
         How far each mode moves [Hz] per plausible parameter change.
     """
@@ -150,7 +150,7 @@ def identify_recordings(recordings, assemblies, options=None, progress=None, lib
 
 
 def identification_record(recordings, assemblies, analyses, result) -> dict:
-    """The JSON record of an identification (CLI-CONTRACT.md keys; lists per recording for a joint fit).
+    """The JSON record of an identification (docs/cli.md keys; lists per recording for a joint fit).
 
     What ``taptune identify --json`` prints and ``taptune batch`` writes per recording.
     """

@@ -181,7 +181,7 @@ def _pooled(results: list[RunResult], bests: list[RunResult]):
 
 def polish_starts(results: list[RunResult], options, modes: int) -> np.ndarray:
     """Each island's best, then diverse good points of the archives (different places on the
-    valley of equally good fits, MODEL.md §8.6), up to ``options.polish_starts``."""
+    valley of equally good fits, docs/physics.md §5), up to ``options.polish_starts``."""
     au, af, j_min = _pooled(results, results)
     good = af <= j_min + options.polish_band + near_band(j_min, options, modes)
     starts = [r.u for r in sorted(results, key=lambda r: r.value)]

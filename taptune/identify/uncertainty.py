@@ -1,6 +1,6 @@
 """The near-optimal set: every parameter vector that explains the measurement as well as the best.
 
-Three frequencies and one peak shape do not pin seven parameters (MODEL.md §8.6): the
+Three frequencies and one peak shape do not pin seven parameters (docs/physics.md §5): the
 good fits form a long, curved valley. Its members are defined term by term against the
 best fit (see :class:`~taptune.identify.core.IdentifyOptions`): the frequency term may
 exceed the best's by what the measured peaks support, the shape term may reach a

@@ -1,4 +1,4 @@
-"""Machine-side files (MACHINE.md): spindle receptances, dummy-holder FRFs, tool-point FRFs.
+"""Machine-side files (docs/machine.md): spindle receptances, dummy-holder FRFs, tool-point FRFs.
 
 SI in every array: m/N, 1/N, rad/(N·m); frequencies in Hz. Every reader validates the
 whole file and raises one-line :class:`~taptune.errors.InputError` messages that name
@@ -428,7 +428,7 @@ def drop_static_row(data: np.ndarray, linenos):
 
 def check_direct_frf(path, name: str, h: np.ndarray) -> np.ndarray:
     """A direct (driving-point) receptance of a damped structure has Im ≤ 0 at every
-    frequency (e^{iωt}, MACHINE.md): refuse one of the other sign convention, from which
+    frequency (e^{iωt}, docs/machine.md): refuse one of the other sign convention, from which
     the lobes would be wrong, not merely noisy (a conjugated FRF gave 0.06 mm). Noise may
     lift some values above 0, and a rigid direction may be given as (near) zero, pure
     noise about as much above as below: only an imaginary part three times more positive

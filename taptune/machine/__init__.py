@@ -1,7 +1,9 @@
 """The machine stage: the holder on a measured spindle, tool-point FRF, stability lobes.
 
-MODEL.md §10 (receptance coupling, inverse RCSA) and §11 (zero-order lobes); files and
-commands in MACHINE.md. This layer uses io, model and identify; nothing below imports it.
+Receptance coupling and inverse RCSA (Schmitz & Smith, *Machining Dynamics*), the lobes by
+semi-discretization (Insperger & Stépán 2002/2004) or the zero-order approximation
+(Altintas & Budak 1995); files and commands in docs/machine.md. This layer uses io, model and
+identify; nothing below imports it.
 Names are imported on first use, so ``import taptune.machine`` stays light.
 
 Public API (signatures in each module's docstring; SI inside: m, Hz, N/m², m/N)::

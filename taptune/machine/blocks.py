@@ -1,4 +1,4 @@
-"""Receptance blocks of the cut holder model at the tool tip and the coupling node (MODEL.md §10.1).
+"""Receptance blocks of the cut holder model at the tool tip and the coupling node (docs/machine.md).
 
 Point 1 is the tool tip, point 2 the coupling node (z = 0 of the cut model). Each block
 ``H_ij`` has shape (n, 2, 2): ``[[w_i/f_j, w_i/m_j], [θ_i/f_j, θ_i/m_j]]`` [m/N, 1/N;
@@ -11,7 +11,7 @@ Two routes, which agree to ~1e-7 (tests/machine/test_blocks.py):
   factorisation of K̃ − σM) and the residual of all higher modes to second order in
   ω² about σ. One eigen-solution serves any number of frequencies: ≈ 0.1 CPU-s for a
   380-DOF model, then microseconds per frequency.
-* ``"direct"``: one banded LU of K̃ − ω²M per frequency (MODEL.md §7.4), exact but ≈ 50×
+* ``"direct"``: one banded LU of K̃ − ω²M per frequency (the reference), exact but ≈ 50×
   slower on 5,000 frequencies (benchmarks/bench_machine.py).
 
 Signatures::
@@ -116,7 +116,7 @@ def point_receptance(fe: FEModel, params: HolderParams, dofs, freq_hz, method: s
         raise ValueError(f"unknown receptance method {method!r}; use one of {METHODS}")
     eig, lam, vec, M = _modes_below(fe, params, mode_cutoff * np.sqrt(w2.max()) / TWO_PI)
     psi = rigid_body_modes(fe, M)
-    # Rigid pair: −ψψᵀ/ω²; elastic modes: φφᵀ/(λ − ω²) (unconjugated, MODEL.md §7.3).
+    # Rigid pair: −ψψᵀ/ω²; elastic modes: φφᵀ/(λ − ω²) (unconjugated, docs/physics.md §3).
     pr, pe = psi[dofs], vec[dofs]
     h = -np.einsum("iq,jq->ij", pr, pr)[None] / w2[:, None, None]
     h = h + np.einsum("ir,jr,fr->fij", pe, pe, 1.0 / (lam[None, :] - w2[:, None]), optimize=True)

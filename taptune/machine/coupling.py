@@ -1,4 +1,4 @@
-"""Receptance coupling of the cut holder model to a measured spindle (MODEL.md §10.2).
+"""Receptance coupling of the cut holder model to a measured spindle (Schmitz & Smith, *Machining Dynamics*).
 
 Rigid joint at the coupling plane:
 
@@ -17,7 +17,7 @@ Signatures::
 
 ``spindle`` is ``{"x": SpindleReceptance, "y": SpindleReceptance or None}`` (y = x when
 absent or None). ``contact`` selects the tool–holder joint of the holder model
-(MODEL.md §10.4): ``"distributed"`` (the identified layer), ``"rigid"`` (tool and holder
+(`--contact`, docs/machine.md): ``"distributed"`` (the identified layer), ``"rigid"`` (tool and holder
 DOFs tied over the contact zone) or ``"lumped"`` (one translational and one rotational
 spring k(1 + iη) at the front face; see :mod:`taptune.machine.lumped`).
 """
@@ -91,7 +91,7 @@ class ToolpointFRF:
     contact: str = "distributed"
 
     def to_dict(self) -> dict:
-        """One entry of MACHINE.md's ``predictions`` list (mm, Hz, m/N)."""
+        """One entry of docs/machine.md's ``predictions`` list (mm, Hz, m/N)."""
         return {
             "stickout": round(self.stickout / MM, 6),
             "coupling_plane_mm": round(self.coupling_plane / MM, 6),
@@ -135,13 +135,13 @@ def _spindle_pair(spindle) -> tuple[SpindleReceptance, SpindleReceptance]:
 def toolpoint_frf(assembly: Assembly, params: HolderParams, spindle, freq_hz, model_options: ModelOptions | None = None,
                   joint=None, contact: str = "distributed", method: str = "modal",
                   lumped: LumpedJoint | None = None) -> ToolpointFRF:
-    """Tool-point FRF of an assembly on a machine (MODEL.md §10).
+    """Tool-point FRF of an assembly on a machine (receptance coupling, docs/machine.md).
 
     Parameters
     ----------
     assembly : Assembly
         Holder, tool and stick-out; the holder's ``gauge_length`` or interface fixes the
-        coupling plane (MACHINE.md).
+        coupling plane (docs/machine.md).
     params : HolderParams
         Identified (or library) holder parameters.
     spindle : dict or SpindleReceptance
@@ -152,7 +152,7 @@ def toolpoint_frf(assembly: Assembly, params: HolderParams, spindle, freq_hz, mo
     joint : array_like, complex, shape (2, 2), optional
         Flexible holder–spindle joint K_j; rigid when omitted.
     contact : {"distributed", "rigid", "lumped"}
-        Tool–holder joint model (MODEL.md §10.4).
+        Tool–holder joint model (`--contact`, docs/machine.md).
     method : {"modal", "direct"}
         Route for the holder's receptance blocks (:mod:`taptune.machine.blocks`).
     lumped : LumpedJoint, optional

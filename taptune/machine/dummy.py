@@ -1,4 +1,4 @@
-"""The spindle's receptance from hammer tests on a dummy holder: inverse RCSA (MODEL.md §10.3).
+"""The spindle's receptance from hammer tests on a dummy holder: inverse RCSA (docs/machine.md).
 
 A simple dummy holder sits in the spindle; three translational FRFs are measured on it,
 G_aa, G_ab, G_bb (point a = its free end, b a second point). The dummy in front of the
@@ -117,7 +117,7 @@ def dummy_model(dummy: Holder, points_m, model_options: ModelOptions | None = No
 
 
 def inverse_rcsa(h, g_aa, g_ab, g_bb):
-    """Solve the three equations of MODEL.md §10.3 per frequency.
+    """Solve the three inverse-RCSA equations (Schmitz & Smith, *Machining Dynamics*) per frequency.
 
     Parameters
     ----------
@@ -186,7 +186,7 @@ class DummyFit:
 def spindle_from_dummy(dummy: Holder, point_a_m: float, point_b_m: float, freq_hz, g_aa, g_ab, g_bb, *,
                        model_options: ModelOptions | None = None, smooth: int | str = "auto",
                        source: str = "dummy", return_fit: bool = False):
-    """Spindle receptance at the coupling plane from three FRFs on a dummy holder (MODEL.md §10.3).
+    """Spindle receptance at the coupling plane from three FRFs on a dummy holder (docs/machine.md).
 
     Parameters
     ----------

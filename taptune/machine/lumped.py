@@ -1,4 +1,4 @@
-"""The traditional lumped tool–holder joint, for comparison (MODEL.md §10.4).
+"""The traditional lumped tool–holder joint, for comparison (`--contact`, docs/machine.md).
 
 Tool and holder are joined only at the front-face node by one translational and one
 rotational spring-damper k(1 + iη); the tool's inserted part hangs free in the bore.

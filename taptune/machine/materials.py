@@ -1,4 +1,4 @@
-"""Named work materials with their cutting-force coefficients (for the lobes, MODEL.md §11).
+"""Named work materials with their cutting-force coefficients (for the lobes, docs/machine.md).
 
 K_tc and K_rc are the tangential and radial shearing-force coefficients of the linear
 (mechanistic) milling force model, F_t = K_tc a h + K_te a, F_r = K_rc a h + K_re a; the

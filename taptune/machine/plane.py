@@ -1,4 +1,4 @@
-"""The coupling plane and the holder cut there (MACHINE.md, MODEL.md §10.1).
+"""The coupling plane and the holder cut there (docs/machine.md).
 
 The coupling plane is where the holder leaves the spindle: the spindle-side face of the
 flange (for HSK, the face contact). It lies ``gauge_length`` behind the holder's front
@@ -151,7 +151,7 @@ def cut_holder(holder: Holder, source: str = "") -> Holder:
 
 
 def cut_assembly(assembly: Assembly) -> Assembly:
-    """The assembly with its holder cut at the coupling plane (MODEL.md §10.1).
+    """The assembly with its holder cut at the coupling plane (docs/machine.md).
 
     Raises
     ------

@@ -10,7 +10,7 @@ The poles are free complex numbers, not conjugate pairs: structures with hystere
 (complex-stiffness) damping, as in this model and in the spindle files, have the modal
 sum Σ φφ/(λ + s²) with poles ±i√λ that are not conjugates, and only positive
 frequencies are measured anyway. A few dozen numbers per FRF then replace thousands of
-noisy samples, and inverse RCSA (MODEL.md §10.3) on the fitted FRFs amplifies far less
+noisy samples, and inverse RCSA (docs/machine.md) on the fitted FRFs amplifies far less
 noise than on the raw ones.
 
 Signature::

@@ -27,7 +27,7 @@ from taptune.signal.taps import NEAR_FULL_SCALE, Tap, find_taps, full_scale_runs
 
 @dataclass(frozen=True)
 class SpectrumOptions:
-    """Every threshold of the analysis (MODEL.md §8.3); defaults as recommended there.
+    """Every threshold of the analysis (what they guard against: docs/tap-test.md).
 
     Times in s, frequencies in Hz, levels in dB.
     """
@@ -149,7 +149,7 @@ class SpectrumAnalysis:
         return {p.mode: p.hz for p in self.bending_peaks}
 
     def to_dict(self) -> dict:
-        """JSON-ready dict (CLI-CONTRACT.md keys first, then extras)."""
+        """JSON-ready dict (docs/cli.md keys first, then extras)."""
         return {
             "file": self.file,
             "sample_rate": int(self.sample_rate),
@@ -443,7 +443,7 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
     expected_hz : array_like, shape (n,), optional
         Model bending frequencies [Hz] (nominal or library parameters).
     bounds_hz : array_like, shape (n, 2), optional
-        Physical (lo, hi) bounds per bending mode [Hz] (MODEL.md §7.6).
+        Physical (lo, hi) bounds per bending mode [Hz] (``bending_bounds``).
     options : SpectrumOptions
     interface_tap : Recording, optional
         Taps on the interface itself: the peaks that grow there are its local modes.

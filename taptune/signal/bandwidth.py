@@ -101,7 +101,7 @@ def hidden_modes(expected_hz, bandwidth_hz: float, sample_rate: float, edge_marg
 
     A mode is hidden when it lies above ``(1 - edge_margin)`` of the effective bandwidth
     (its peak would be cut or bent by the transition band) or above 0.9 × Nyquist (where
-    anti-alias filters already roll off, MODEL.md §8.3). ``limit_hz`` is the tighter limit.
+    anti-alias filters already roll off). ``limit_hz`` is the tighter limit.
     """
     limit = min((1 - edge_margin) * bandwidth_hz, 0.9 * sample_rate / 2)
     return [(n, float(f), limit) for n, f in enumerate(np.asarray(expected_hz, dtype=float), 1) if f > limit]

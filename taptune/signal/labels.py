@@ -1,4 +1,4 @@
-"""Peak labels (MODEL.md §8.3): ``bending`` modes 1–3, ``local`` interface modes, ``other``.
+"""Peak labels (docs/physics.md §4): ``bending`` modes 1–3, ``local`` interface modes, ``other``.
 
 *local* — the spindle interface's own modes. They are known only as frequency bands
 per interface (HSK-A63: 9.35–10.55 kHz around the published 9.7 and 10.2 kHz, wide
@@ -7,7 +7,7 @@ a TOML/JSON file. A second recording tapped on the interface itself marks them e
 the peaks that grow.
 
 *bending* — with model guidance (``expected_hz`` from nominal or library parameters,
-``bounds_hz`` from §7.6) the three modes are assigned *jointly*: every ascending choice
+``bounds_hz`` from ``bending_bounds``) the three modes are assigned *jointly*: every ascending choice
 of peaks inside the modes' bounds is scored by how well one explanation accounts for
 all of them — a shift common to all modes (material factors) plus a contact shift that
 moves each mode in proportion to its distance from its rigid-contact bound (contact-
@@ -42,7 +42,7 @@ Bands = tuple[tuple[float, float], ...]
 BUILTIN_BANDS: dict[str, Bands] = {
     "HSK-A63": ((9350.0, 10550.0),),
 }
-#: Frequency factor of the material corner in the upper bounds of MODEL.md §7.6
+#: Frequency factor of the material corner in the upper bounds of ``bending_bounds``
 #: (modulus factor 1.10, density factor 0.95).
 UPPER_BOUND_MATERIAL = float(np.sqrt(1.10 / 0.95))
 # BANDS_ENV (taptune.io.files) names an extra band table (TOML or JSON).
@@ -163,7 +163,7 @@ class LabelOptions:
         modes far more than anything else, so it is rarely spurious.
     unexplained_cost : float
         Cost of leaving a loud peak unassigned while a mode whose bounds hold it is
-        missing, or took a peak more than ``louder_db`` quieter (MODEL.md §8.3: a band
+        missing, or took a peak more than ``louder_db`` quieter (docs/physics.md §4: a band
         or a distant guess must not silently drop it).
     louder_db : float
     faint_cost : float
@@ -250,7 +250,7 @@ def _guidance(e, bounds_hz, spread_hz, options: LabelOptions):
     else:
         bnd = np.asarray(bounds_hz, dtype=np.float64).reshape(n, 2)
         # The upper bound is the rigid contact with the stiffest, lightest holder
-        # material of the search space (MODEL.md §7.6): take the material factor out.
+        # material of the search space (``bending_bounds``): take the material factor out.
         rigid = bnd[:, 1] / UPPER_BOUND_MATERIAL
     # Each mode's sensitivity to the contact: log-distance from nominal to rigid contact
     # (the tool's modes move a lot with the contact, a holder mode hardly).
@@ -365,7 +365,7 @@ def ranked_labelings(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *
     (fewer if fewer exist). ``must_try`` lists peak indices for which the best labeling
     that uses each of them, among those assigning the most modes, is appended (if not already among the kept): a prominent
     peak far from where the guidance expects a mode must stay a candidate for the
-    fit to judge (MODEL.md §8.3: the model decides).
+    fit to judge (docs/physics.md §4: the model decides).
     """
     e = np.asarray(expected_hz, dtype=np.float64)
     n = e.size
@@ -434,7 +434,7 @@ def assign_bending(peaks: list[Peak], expected_hz, bounds_hz=None, bands=(), *,
     expected_hz : array_like, shape (n,)
         Model bending frequencies [Hz], ascending.
     bounds_hz : array_like, shape (n, 2), optional
-        Physical (lo, hi) bounds per mode [Hz] (MODEL.md §7.6); without them each mode
+        Physical (lo, hi) bounds per mode [Hz] (``bending_bounds``); without them each mode
         may be within ±30 % of its expected frequency and the rigid bound is taken
         10 % above it.
     bands : sequence of (lo, hi)

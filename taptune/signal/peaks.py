@@ -1,6 +1,6 @@
 """Peaks: picking on the averaged spectrum, then sub-bin refinement by a pole fit.
 
-Picking follows MODEL.md §8.3 (local maxima of the dB spectrum with a prominence
+Picking follows docs/physics.md §4 (local maxima of the dB spectrum with a prominence
 threshold, parabolic interpolation over three bins). Parabolic interpolation is biased
 by the neighbouring modes, the background and the zero-padding grid, by up to a few
 0.01 % — as large as the accuracy we need. So each peak is refined by fitting the taps'
@@ -13,7 +13,7 @@ echo from the floor or a wall) are what is left: they skew wide peaks by up to a
 0.1 %; :func:`refine_peaks` starts the segments after the early ones and models a late
 one explicitly (a delayed copy of every pole's column).
 
-Frequencies are reported as the model defines them (MODEL.md §13: ``sqrt(Re λ)/2π``
+Frequencies are reported as the model defines them (docs/physics.md §3: ``sqrt(Re λ)/2π``
 of the eigenvalue λ = −s² of the pole s = −σ + iω_d): f = √(ω_d² − σ²)/2π and
 ζ = Im λ / (2 Re λ) = ω_d σ / (ω_d² − σ²).
 """

@@ -1,4 +1,4 @@
-"""Per-tap spectra, their average, and the noise spectrum between taps (MODEL.md §8.3).
+"""Per-tap spectra, their average, and the noise spectrum between taps (docs/physics.md §4).
 
 A tap's ring-down (decay time 1–30 ms) is practically complete within 0.25 s, so each
 segment is transformed with a rectangular window, a short cosine fade at the end, and

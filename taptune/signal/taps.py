@@ -1,4 +1,4 @@
-"""Tap detection: mono mix, envelope, onsets, clipped taps and double hits (MODEL.md §8.3).
+"""Tap detection: mono mix, envelope, onsets, clipped taps and double hits (docs/tap-test.md).
 
 A tap is a hard, short impact: the envelope jumps from the noise floor by orders of
 magnitude within a fraction of a millisecond and then decays for 1–30 ms per mode. Hum,

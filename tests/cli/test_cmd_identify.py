@@ -71,7 +71,7 @@ def test_predict_reads_the_library_and_reports_spread(identified, tap, tmp_path,
     assert code == 0
     data = json.loads(out.read_text())
     assert [p["stickout"] for p in data["predictions"]] == [63.5, 73.5]
-    # MODEL.md §13.4: holder A at 63.5 / 73.5 mm.
+    # Holder A at 63.5 / 73.5 mm (converged values of two independent implementations).
     for p, truth in zip(data["predictions"], [(3748.4, 13124.7, 17765.9), (3077.1, 11118.7, 16898.9)]):
         assert set(p) >= {"stickout", "bending_hz", "bending_hz_spread", "damping_ratio"}
         for f, t in zip(p["bending_hz"], truth):

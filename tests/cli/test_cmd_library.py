@@ -1,4 +1,4 @@
-"""``taptune library``: output, exit codes and messages (CLI-CONTRACT.md)."""
+"""``taptune library``: output, exit codes and messages (docs/cli.md)."""
 
 from __future__ import annotations
 

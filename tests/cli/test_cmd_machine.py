@@ -1,4 +1,4 @@
-"""``taptune toolpoint``, ``lobes`` and ``spindle`` (MACHINE.md): contract, accuracy, bad inputs.
+"""``taptune toolpoint``, ``lobes`` and ``spindle`` (docs/machine.md): contract, accuracy, bad inputs.
 
 End to end on the bundled synthetic machine (recordings/machine/) and, when present, on
 the independent check case /work/shared/cases-dev/machine-d01 (its truth files were made
@@ -163,7 +163,7 @@ LOBES_KEYS = {"rpm", "a_lim_mm", "a_crit_mm", "pockets", "chatter_hz"}
 
 
 def test_lobes_single_mode_slotting_matches_the_closed_form(tmp_path, capsys):
-    """MODEL.md §13.6: slotting, x flexible with one mode, y rigid: a_lim,min = 8 k ζ (1 + ζ) / (N K_rc)
+    """Closed form of the zero-order method (Altintas & Budak 1995): slotting, x flexible with one mode, y rigid: a_lim,min = 8 k ζ (1 + ζ) / (N K_rc)
     = 1.679 mm for k = 1e7 N/m, ζ = 0.02, N = 4, K_rc = 243 MPa (K_tc does not enter)."""
     k, zeta, fn = 1e7, 0.02, 1200.0
     f = np.arange(600.0, 2400.0 + 0.5, 1.0)
@@ -229,7 +229,7 @@ def test_lobes_from_the_d01_frf_match_the_independent_truth(tmp_path, capsys):
 
 
 def test_lobes_on_the_machine_equal_lobes_from_the_toolpoint_csv(tmp_path, capsys):
-    """The two routes of MACHINE.md (predicted on the machine, --frf of the written FRF) agree."""
+    """The two routes of docs/machine.md (predicted on the machine, --frf of the written FRF) agree."""
     cut = ["--teeth", 4, "--material", "al6082", "--ae", 8, "--milling", "down", "--rpm", 8000, 20000, 20,
            "--method", "zoa"]
     code, text, err = taptune(capsys, "lobes", *DEMO, *cut, "--freq", 200, 8000, 2, "--json", tmp_path / "a.json",
@@ -296,7 +296,8 @@ segments = [
 
 
 def dummy_measurements(folder, spindle, points_mm, freq_hz):
-    """Hammer tests on the dummy in the spindle: G_ij = H_ij − H_ic (H_cc + H_S)⁻¹ H_cj (MODEL.md §10.3),
+    """Hammer tests on the dummy in the spindle: G_ij = H_ij − H_ic (H_cc + H_S)⁻¹ H_cj (inverse RCSA,
+    docs/machine.md),
     the dummy's free-free receptances by direct solution (the command uses the modal route).
     Written in three formats: G_aa as .frf text, G_ab as CSV, G_bb as UFF58 (or CSV without pyuff)."""
     from taptune.io.assembly import load_holder
@@ -325,7 +326,7 @@ def dummy_measurements(folder, spindle, points_mm, freq_hz):
 
 
 def test_spindle_recovers_the_bundled_spindle_from_dummy_tests(tmp_path, capsys):
-    """Inverse RCSA identity (MODEL.md §13.5) through files: noise-free dummy FRFs made with the example
+    """Inverse RCSA identity through files: noise-free dummy FRFs made with the example
     spindle give it back (relative error < 1e-4 in every term; the UFF file holds 12 digits)."""
     from taptune.io.machine import read_spindle
 
@@ -391,7 +392,7 @@ def test_spindle_bad_inputs_end_in_one_line(tmp_path, capsys):
 
 def test_toolpoint_contact_models_differ_as_physics_says(tmp_path, capsys):
     """A rigidly tied tool is stiffer than one held by the identified compliant layer: its strongest
-    tool mode on the machine is higher (MODEL.md §10.4 comparison)."""
+    tool mode on the machine is higher (comparison of `--contact`, docs/machine.md)."""
     tops = {}
     for contact in ("distributed", "rigid", "lumped"):
         out = tmp_path / f"{contact}.json"

@@ -1,4 +1,4 @@
-"""``taptune model``: output, JSON keys, exit codes and one-line messages (CLI-CONTRACT.md)."""
+"""``taptune model``: output, JSON keys, exit codes and one-line messages (docs/cli.md)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,8 @@ def taptune(capsys, *argv) -> tuple[int, str, str]:
 
 
 def test_nominal_model_prints_a_table_and_writes_the_contract_json(reference_toml, tmp_path, capsys):
-    """Nominal parameters, reference assembly: 4797.3 / 14836.9 / 20088.8 Hz (MODEL.md §13.4)."""
+    """Nominal parameters, reference assembly: 4797.3 / 14836.9 / 20088.8 Hz
+    (the nominal parameters of docs/physics.md §2; converged values of two independent implementations)."""
     out_json = tmp_path / "out" / "model.json"
     code, out, err = taptune(capsys, "model", reference_toml, "--json", out_json)
     assert code == 0, err
@@ -39,7 +40,7 @@ def test_nominal_model_prints_a_table_and_writes_the_contract_json(reference_tom
 
 
 def test_params_file_gives_holder_A_and_json_to_stdout_is_pure_json(reference_toml, tmp_path, capsys):
-    """§13.4 holder A at 53.5 mm: f1 = 4685.8 Hz; an identify-style {"params": {...}} file also works."""
+    """Holder A at 53.5 mm: f1 = 4685.8 Hz (converged values of two independent implementations); an identify-style {"params": {...}} file also works."""
     params = tmp_path / "a.json"
     params.write_text(json.dumps({"params": HOLDER_A}))
     code, out, err = taptune(capsys, "model", reference_toml, "--params", params, "--json", "-")

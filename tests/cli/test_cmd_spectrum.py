@@ -1,4 +1,4 @@
-"""taptune spectrum: the CLI-CONTRACT.md JSON, the plot, and one line with exit 2 for bad files."""
+"""taptune spectrum: the docs/cli.md JSON, the plot, and one line with exit 2 for bad files."""
 
 import json
 

@@ -1,8 +1,9 @@
 """Fixtures for the GUI tests: a generated tap recording with its assembly, a temporary library.
 
 The recording is made from the model itself: the first three bending modes of the
-reference assembly with holder A's parameters (MODEL.md §13.4) ring down after each
-tap, on a low noise floor, as a microphone would hear a tool-tip tap.
+reference assembly (the example of docs/assembly-format.md) with holder A's published
+parameters (CIRP J. Manuf. Sci. Technol. 37, 2022) ring down after each tap, on a low noise floor,
+as a microphone would hear a tool-tip tap.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import gc
 import numpy as np
 import pytest
 
-# Holder A of MODEL.md §13.4 (published identified values).
+# Holder A, published identified values (CIRP J. Manuf. Sci. Technol. 37 (2022)).
 HOLDER_A = dict(k_tt=1.90e9, k_rr=9.37e3, eta_tt=1.98e-3, eta_rr=8.20e-3, alpha=-10.0,
                 density_factor=7478 / 7800, modulus_factor=1.0)
 FS = 48000

@@ -1,6 +1,6 @@
 """The Check button: a new tap of a library holder → verdict, per-mode table, history in the library.
 
-Holder A (MODEL.md §13.4) is put in the library with its published parameters; the taps
+Holder A (CIRP J. Manuf. Sci. Technol. 37 (2022)) is put in the library with its published parameters; the taps
 are generated from the model: the same holder at another stick-out, and the same holder
 with both contact stiffnesses at 40 % (a worn, badly seated collet).
 """

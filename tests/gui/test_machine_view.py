@@ -1,7 +1,7 @@
 """The Machine view: tool-point FRF and lobes of a library holder, the stick-out slider, the machine file.
 
 The machine is the bundled synthetic example (recordings/machine); the holder is holder A
-of MODEL.md §13.4 with its published parameters (no identification needed).
+(CIRP J. Manuf. Sci. Technol. 37 (2022)) with its published parameters (no identification needed).
 """
 
 from __future__ import annotations

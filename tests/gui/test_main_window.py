@@ -173,7 +173,7 @@ def test_library_holder_predicts_with_the_panel_tool(qtbot, window, library_path
     assert window.library_view.table.rowCount() == 1
     with qtbot.waitSignal(window.predictor.predicted, timeout=20000) as blocker:
         window.library_view.buttons["predict"].click()
-    # MODEL.md §13.4: holder A at 53.5 mm, f1 = 4685.8 Hz.
+    # Holder A at 53.5 mm, f1 = 4685.8 Hz (converged values of two independent implementations).
     prediction = blocker.args[0]
     assert prediction.bending_hz[0] == pytest.approx(4685.8, rel=5e-4)
     assert window.tabs.currentWidget() is window.predictor

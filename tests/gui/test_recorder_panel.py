@@ -112,7 +112,7 @@ def test_without_portaudio_the_panel_says_so(qtbot, library_path):
 
 
 def test_record_the_second_stickout(qtbot, library_path, settings, tmp_path, generated_recording):
-    # The same holder and tool at 63.5 mm (MODEL.md §13.4 holder A: f1 3,748.6 Hz).
+    # The same holder and tool at 63.5 mm (holder A: f1 3,748.6 Hz, converged value).
     stream = FakeInputStream(tap_sound((3748.6, 13125.9, 17768.6), (0.0037, 0.0023, 0.0019), (1.0, 0.5, 0.35),
                                        (0.4, 1.2, 2.0, 2.8), 3.6))
     win = _window(qtbot, library_path, stream, settings)

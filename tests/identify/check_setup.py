@@ -1,7 +1,7 @@
 """One identified holder and taps of it (good, elsewhere, worn) for the check tests.
 
-The identification (a synthetic tap of the reference assembly at 53.5 mm, holder A of
-MODEL.md §13.4, ~6 CPU-s) runs once per test session, shared by the identify and CLI
+The identification (a synthetic tap of the reference assembly at 53.5 mm, published
+holder A, ~6 CPU-s) runs once per test session, shared by the identify and CLI
 check tests through ``identified_holder``.
 """
 
@@ -16,7 +16,7 @@ from pathlib import Path
 
 from taptune.model.params import HolderParams
 
-# Published holder A (CIRP JMST 2022) on the reference assembly, MODEL.md §13.4.
+# Published holder A (CIRP JMST 2022) on the reference assembly (the example of docs/assembly-format.md).
 HOLDER_A = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.0)
 HOLDER_NAME = "ER32 collet chuck HSK-A63 x 100"
 #: The tap sound of the test recordings (as in the identify tests).

@@ -8,9 +8,9 @@ from taptune.model.params import HolderParams
 
 from .helpers import model_analysis
 
-# Published holder A (CIRP JMST 2022) on the reference assembly, MODEL.md §13.4.
+# Published holder A (CIRP JMST 2022) on the reference assembly (the example of docs/assembly-format.md).
 HOLDER_A = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.0)
-# MODEL.md §13.4 converged f1-f3 [Hz] of holder A at the two transfer stick-outs.
+# Converged f1-f3 [Hz] of holder A at the two transfer stick-outs (two independent implementations).
 TRANSFER = {63.5: (3748.4, 13124.7, 17765.9), 73.5: (3077.1, 11118.7, 16898.9)}
 
 
@@ -40,7 +40,7 @@ def test_fit_matches_the_measured_frequencies_to_0_1_percent(reference_fit):
 
 @pytest.mark.parametrize("stickout_mm", sorted(TRANSFER))
 def test_predictions_at_other_stickouts_match_the_published_model_values(reference_fit, stickout_mm):
-    """MODEL.md §8.6: parameters are not identifiable, predictions are (within 1 %, the issue's bound;
+    """docs/physics.md §5: parameters are not identifiable, predictions are (within 1 %, the issue's bound;
     the planning experiments saw up to 0.6 % on this very case)."""
     asm, _, result = reference_fit
     p = predict(result.param_sets, asm.with_stickout(stickout_mm * 1e-3), identified=[asm])

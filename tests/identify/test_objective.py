@@ -1,4 +1,4 @@
-"""The objective of MODEL.md §8.4: frequency terms plus the normalised shape in the mode-1 window."""
+"""The objective of docs/physics.md §4: frequency terms plus the normalised shape in the mode-1 window."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Machine files (MACHINE.md): every reader on good input and on each kind of bad input.
+"""Machine files (docs/machine.md): every reader on good input and on each kind of bad input.
 
 Good files round-trip through the writers to the writers' precision (10 significant
 digits); every bad file is one InputError that names the file and the problem.

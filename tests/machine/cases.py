@@ -27,7 +27,7 @@ def columns(name: str) -> np.ndarray:
 
 
 def spindle(name: str) -> SpindleReceptance:
-    """A spindle receptance CSV (MACHINE.md columns) as SpindleReceptance."""
+    """A spindle receptance CSV (docs/machine.md columns) as SpindleReceptance."""
     d = columns(name)
     h = np.empty((len(d), 2, 2), dtype=complex)
     h[:, 0, 0] = d[:, 1] + 1j * d[:, 2]

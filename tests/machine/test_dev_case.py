@@ -1,6 +1,6 @@
 """The independent development case machine-d01: tool point, lobes and spindle against its truth.
 
-The truth comes from an implementation of MODEL.md independent of taptune's code: the
+The truth comes from an implementation of the same model independent of taptune's code: the
 tool point by a direct solve of the cut model (0.25 mm mesh) with the spindle's
 dynamic stiffness added at the coupling node, the lobes on the FRF grid.
 """
@@ -39,7 +39,7 @@ def test_toolpoint_matches_the_independent_truth():
 
 
 def test_rigid_and_lumped_joints_miss_the_truth():
-    """MODEL.md §10.4: with the same holder, a tied or front-face-lumped tool joint puts the
+    """`--contact` (docs/machine.md): with the same holder, a tied or front-face-lumped tool joint puts the
     dominant peak 14 % too high (3,530 vs 3,092 Hz); the distributed layer is within 0.1 %."""
     for contact in ("rigid", "lumped"):
         tp, t = d01_toolpoint(contact)

@@ -1,4 +1,4 @@
-"""Inverse RCSA from a dummy holder (MODEL.md §10.3, §13.5)."""
+"""Inverse RCSA from a dummy holder (docs/machine.md; Schmitz & Smith, *Machining Dynamics*)."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ def synthetic_measurements(freq_hz, hs, a_m=0.0, b_m=0.06):
 
 
 def test_noise_free_measurements_return_the_spindle():
-    """MODEL.md §13.5: relative error < 1e-9 on noise-free synthetic data (median 4e-10).
+    """Inverse-RCSA identity: relative error < 1e-9 on noise-free synthetic data (median 4e-10).
 
     Near the free dummy's first bending resonance (≈ 6 kHz) |H_cc| ≫ |H_S| and
     H_S = X⁻¹ − H_cc loses digits to the subtraction (worst 1.7e-7); those frequencies

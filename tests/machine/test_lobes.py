@@ -1,4 +1,4 @@
-"""Zero-order stability lobes (MODEL.md §11, §13.6)."""
+"""Zero-order stability lobes (Altintas & Budak 1995)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def sdof(freq_hz, k, zeta, fn):
 
 
 def test_closed_form_slotting_single_mode():
-    """MODEL.md §13.6: a_lim,min = 8kζ(1+ζ)/(N K_rc) = 1.6790 mm (k = 1e7, ζ = 0.02, N = 4, K_rc = 243 MPa)."""
+    """Closed form (Altintas & Budak 1995), slotting with one flexible mode: a_lim,min = 8kζ(1+ζ)/(N K_rc) = 1.6790 mm (k = 1e7, ζ = 0.02, N = 4, K_rc = 243 MPa)."""
     k, zeta, n, krc = 1e7, 0.02, 4, 243e6
     f = np.arange(500.0, 1500.0, 1.0)
     phi = sdof(f, k, zeta, 1000.0)

@@ -1,4 +1,4 @@
-"""The coupling plane: [holder] gauge_length, the interface table, the cut holder (MACHINE.md)."""
+"""The coupling plane: [holder] gauge_length, the interface table, the cut holder (docs/machine.md)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Receptance coupling (MODEL.md §10.2, §13.5): identities and an independent route.
+"""Receptance coupling (Schmitz & Smith, *Machining Dynamics*): identities and an independent route.
 
-The reference assembly of MODEL.md §13.4 (HSK-A63: coupling plane 32 mm from the back)
+The reference assembly of docs/assembly-format.md (HSK-A63: coupling plane 32 mm from the back)
 with holder A's parameters, cut at the plane. The checks compare the RCSA formula on
 the modal receptance blocks against direct sparse solves of the cut model with the
 machine side added as stiffness at the coupling node.
@@ -72,7 +72,7 @@ ROUTES = pytest.mark.parametrize("route, tol", [(3, 1e-8), (2, 1e-7)], ids=["dir
 
 @ROUTES
 def test_rigid_spindle_equals_the_model_clamped_at_the_coupling_node(cut, route, tol):
-    """MODEL.md §13.5: H_S → 0 gives the clamped model (direct sparse solve, DOFs removed) to 1e-8."""
+    """RCSA identity: H_S → 0 gives the clamped model (direct sparse solve, DOFs removed) to 1e-8."""
     fe, b = cut[1], cut[route]
     g = couple(b.h11, b.h12, b.h21, b.h22, np.zeros_like(b.h22))[:, 0, 0]
     ref = sparse_tip(fe, FREQ, drop=(0, 1))
@@ -81,7 +81,7 @@ def test_rigid_spindle_equals_the_model_clamped_at_the_coupling_node(cut, route,
 
 @ROUTES
 def test_spring_spindle_equals_grounded_springs(cut, route, tol):
-    """MODEL.md §13.5: H_S = diag(1/k, 1/kθ) gives grounded springs at the node (direct FE) to 1e-8."""
+    """RCSA identity: H_S = diag(1/k, 1/kθ) gives grounded springs at the node (direct FE) to 1e-8."""
     fe, b = cut[1], cut[route]
     k, kt = 5.0e7, 2.0e5
     hs = np.broadcast_to(np.diag([1 / k, 1 / kt]).astype(complex), b.h22.shape)

@@ -1,4 +1,4 @@
-"""A uniform free-free steel cylinder against closed-form and exact results (MODEL.md §13.1, §13.3)."""
+"""A uniform free-free steel cylinder against closed-form and exact results (Timoshenko beam theory; Hutchinson 2001 shear coefficient)."""
 
 import numpy as np
 import pytest
@@ -50,7 +50,7 @@ def bending_hz(el, euler_bernoulli=False):
     ],
 )
 def test_fine_mesh_matches_exact_timoshenko_free_free_frequencies_to_0_05_percent(length, shear, exact):
-    """§13.1: 0.5 mm elements reproduce the exact Timoshenko (transfer-matrix) frequencies."""
+    """0.5 mm elements reproduce the exact Timoshenko (transfer-matrix) frequencies."""
     f = bending_hz(cylinder(length, int(round(length / 0.0005)), shear))
     assert np.allclose(f, exact, rtol=5e-4)
 
@@ -60,13 +60,13 @@ def test_fine_mesh_matches_exact_timoshenko_free_free_frequencies_to_0_05_percen
     [(0.100, (8438.7, 20551.2, 35556.1)), (0.200, (2252.1, 5953.0, 11065.0))],
 )
 def test_10_mm_elements_match_the_reference_fe_rows_to_0_01_percent(length, fe_rows):
-    """§13.1 FE rows (Hutchinson κ, 10 mm elements); the FE converges from above."""
+    """10 mm elements (Hutchinson κ); the FE converges from above."""
     f = bending_hz(cylinder(length, int(round(length / 0.010))))
     assert np.allclose(f, fe_rows, rtol=1e-4)
 
 
 def test_euler_bernoulli_limit_converges_to_the_closed_form():
-    """§13.1: φ = 0 without rotary inertia → f_n = (β_n L)²/(2πL²)·sqrt(EI/ρA): 9238.1 / 25465.2 / 49921.9 Hz at L = 100 mm."""
+    """φ = 0 without rotary inertia → f_n = (β_n L)²/(2πL²)·sqrt(EI/ρA): 9238.1 / 25465.2 / 49921.9 Hz at L = 100 mm."""
     beta_l = np.array([4.7300, 7.8532, 10.9956])
     closed = beta_l**2 / (2 * np.pi * 0.1**2) * (D / 4) * np.sqrt(210e9 / 7800.0)
     assert np.allclose(closed, (9238.1, 25465.2, 49921.9), rtol=2e-5)
@@ -75,7 +75,7 @@ def test_euler_bernoulli_limit_converges_to_the_closed_form():
 
 
 def test_shear_and_rotary_inertia_lower_the_frequencies_more_for_stubby_beams():
-    """§13.1: −8.8 / −19.8 / −30.0 % against Euler–Bernoulli at L/D = 5, −2.5 / −6.5 / −11.5 % at L/D = 10."""
+    """Timoshenko against Euler–Bernoulli: −8.8 / −19.8 / −30.0 % against Euler–Bernoulli at L/D = 5, −2.5 / −6.5 / −11.5 % at L/D = 10."""
     for length, drop in ((0.1, (8.8, 19.8, 30.0)), (0.2, (2.5, 6.5, 11.5))):
         el = cylinder(length, int(round(length / 0.001)))
         rel = 100 * (1 - bending_hz(el) / bending_hz(el, euler_bernoulli=True))
@@ -83,7 +83,7 @@ def test_shear_and_rotary_inertia_lower_the_frequencies_more_for_stubby_beams():
 
 
 def test_low_frequency_end_receptance_follows_the_rigid_body_mass_line():
-    """§13.3: Ø20 × 100 mm at 10 Hz: H_end,end = −4.0445e-3 m/N (−4.1348e-3 without rotary inertia)."""
+    """Rigid-body asymptote −(1/m + d²/J)/ω², Ø20 × 100 mm at 10 Hz: H_end,end = −4.0445e-3 m/N (−4.1348e-3 without rotary inertia)."""
     el = cylinder(0.1, 20)
     K, M = body_matrices(el)
     n = K.shape[0]

@@ -1,7 +1,7 @@
-"""The binding mesh-convergence requirement (MODEL.md §5.3).
+"""The binding mesh-convergence requirement (docs/physics.md §1).
 
 At the default mesh, halving every element must change f1–f3 by less than 0.05 % and ζ1
-by less than 1 %, on every assembly of the suite and across the search space of §8.1
+by less than 1 %, on every assembly of the suite and across the search space of docs/physics.md §2
 (including its stiff, soft and lossy corners): the holder parameters are properties of
 the holder, not of a mesh.
 """
@@ -24,7 +24,7 @@ HOLDER_A = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.
 
 
 def corner(bits) -> HolderParams:
-    """A corner of the §8.1 search space: bit 1 = upper bound of that p."""
+    """A corner of the search space (docs/physics.md §2): bit 1 = upper bound of that p."""
     return from_p(np.where(np.asarray(bits) == 1, P_UPPER, P_LOWER))
 
 
@@ -65,14 +65,14 @@ def test_assets_cover_the_three_holder_types_and_several_tool_diameters():
 
 @pytest.mark.parametrize("name", list(PARAMS))
 def test_halving_every_element_changes_f1_f3_by_under_0_05_percent_and_zeta1_by_under_1_percent(models, name):
-    """§5.3 on the bundled assemblies (ER32 Ø16 and Ø6, shrink-fit Ø12, hydraulic Ø20)."""
+    """Mesh convergence on the bundled assemblies (ER32 Ø16 and Ø6, shrink-fit Ø12, hydraulic Ø20)."""
     df, dz = convergence(*models, PARAMS[name])
     assert np.all(df < 5e-4), df
     assert dz < 1e-2, dz
 
 
 def test_the_default_mesh_stays_small_and_converged(reference_assembly):
-    """A few hundred DOFs for the reference assembly, and the converged value within 0.05 % of §13.4."""
+    """A few hundred DOFs for the reference assembly, and the converged value within 0.05 % of the converged values of two independent implementations."""
     fe = build_model(reference_assembly)
     assert fe.n_dofs < 500
     assert solve_modes(fe, HOLDER_A, 1).frequency_hz[0] == pytest.approx(4685.8, rel=5e-4)
@@ -80,7 +80,7 @@ def test_the_default_mesh_stays_small_and_converged(reference_assembly):
 
 @pytest.mark.slow
 def test_every_corner_of_the_search_space_converges_on_every_asset(models):
-    """§5.3 at all 128 corners of the §8.1 bounds (slow: ~2 s per assembly)."""
+    """Mesh convergence at all 128 corners of the search space (slow: ~2 s per assembly)."""
     for bits in itertools.product((0, 1), repeat=7):
         df, dz = convergence(*models, corner(bits))
         assert np.all(df < 5e-4) and dz < 1e-2, (bits, df, dz)

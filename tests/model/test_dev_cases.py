@@ -2,7 +2,7 @@
 
 Each development case's ``truth.json`` holds the seven holder parameters and f1–f3 at the
 recorded stick-out and at two others (Richardson extrapolation of 0.5 and 0.25 mm meshes
-of the continuous contact of MODEL.md §5), plus ζ1. The model must match f to 0.05 % and
+of the continuous contact of docs/physics.md §1), plus ζ1. The model must match f to 0.05 % and
 ζ1 to 2 %. Skipped where the shared folder is absent.
 """
 

@@ -1,4 +1,4 @@
-"""Timoshenko element matrices and shear coefficients (MODEL.md §3, checks of §13.2)."""
+"""Timoshenko element matrices and shear coefficients (Friedman & Kosmatka 1993; Hutchinson 2001)."""
 
 import numpy as np
 import pytest
@@ -24,7 +24,7 @@ def one_element(l=0.010, d=0.020, **material):
 
 
 def test_solid_steel_element_of_10_mm_matches_reference_stiffness_and_mass():
-    """§13.2: Ø20 solid steel, l = 10 mm: κ = 0.923098, φ = 8.384806 and the listed entries."""
+    """One element, checked by hand: Ø20 solid steel, l = 10 mm: κ = 0.923098, φ = 8.384806 and the listed entries."""
     el = one_element()
     kappa = shear_coefficient(el.od, el.id, el.poisson)[0]
     assert kappa == pytest.approx(0.923098, abs=1e-6)
@@ -43,7 +43,7 @@ def test_solid_steel_element_of_10_mm_matches_reference_stiffness_and_mass():
 
 
 def test_element_stiffness_has_exactly_two_rigid_body_modes_and_mass_sums_to_rho_A_l():
-    """§13.2: K_e has two zero eigenvalues; M11 + M13 + M31 + M33 = ρAl = 0.0245044 kg."""
+    """One element: K_e has two zero eigenvalues; M11 + M13 + M31 + M33 = ρAl = 0.0245044 kg."""
     el = one_element()
     ev = np.linalg.eigvalsh(el.K()[0].real)
     assert np.sum(np.abs(ev) < 1e-9 * ev.max()) == 2
@@ -53,7 +53,7 @@ def test_element_stiffness_has_exactly_two_rigid_body_modes_and_mass_sums_to_rho
 
 
 def test_material_loss_factor_scales_the_whole_stiffness_by_one_plus_i_eta():
-    """§3.4: Ẽ = E(1 + iη) with φ unchanged gives exactly K̃_e = (1 + iη) K_e."""
+    """Friedman & Kosmatka (1993) stiffness: Ẽ = E(1 + iη) with φ unchanged gives exactly K̃_e = (1 + iη) K_e."""
     el = one_element(loss_factor=0.003)
     assert np.allclose(el.K()[0], (1 + 0.003j) * one_element().K()[0].real, rtol=1e-15)
 
@@ -69,19 +69,19 @@ def test_material_loss_factor_scales_the_whole_stiffness_by_one_plus_i_eta():
     ],
 )
 def test_shear_coefficients_of_solid_and_hollow_circles(d_in, d_out, nu, hutchinson, cowper):
-    """§13.2 shear coefficients (Hutchinson / Cowper); only the diameter ratio matters."""
+    """Shear coefficients of Hutchinson (2001) and Cowper (1966); only the diameter ratio matters."""
     assert shear_coefficient([d_out], [d_in], nu, "hutchinson")[0] == pytest.approx(hutchinson, abs=5e-5)
     assert shear_coefficient([d_out], [d_in], nu, "cowper")[0] == pytest.approx(cowper, abs=5e-5)
 
 
 def test_thin_walled_hutchinson_limit_is_one_plus_nu_over_two_plus_nu():
-    """§3.2: κ → (1 + ν)/(2 + ν) as the wall gets thin."""
+    """Hutchinson (2001): κ → (1 + ν)/(2 + ν) as the wall gets thin."""
     k = shear_coefficient([1.0], [0.99999], 0.29, "hutchinson")[0]
     assert k == pytest.approx(1.29 / 2.29, rel=1e-6)
 
 
 def test_zero_shear_parameter_gives_the_classical_hermite_matrices():
-    """§3.5: φ = 0 reduces K_e and M_A + M_I to the Euler–Bernoulli / Rayleigh matrices."""
+    """Friedman & Kosmatka (1993) consistent mass: φ = 0 reduces K_e and M_A + M_I to the Euler–Bernoulli / Rayleigh matrices."""
     l, E, I, rho, A = 0.01, 2e11, 1e-8, 7800.0, 3e-4
     K = stiffness_matrices(E, np.array([I]), np.array([l]), np.array([0.0]))[0]
     herm_k = E * I / l**3 * np.array(
@@ -102,7 +102,7 @@ def test_zero_shear_parameter_gives_the_classical_hermite_matrices():
 
 
 def test_core_mass_is_hermite_translation_plus_linear_rotation_inertia():
-    """§3.5 mass="core": rotary inertia (ρIl/6)[0 0 0 0; 0 2 0 1; 0 0 0 0; 0 1 0 2]."""
+    """mass="core": rotary inertia (ρIl/6)[0 0 0 0; 0 2 0 1; 0 0 0 0; 0 1 0 2]."""
     l, rho, A, I = 0.01, 7800.0, 3e-4, 1e-8
     M = core_mass_matrices(rho, np.array([A]), np.array([I]), np.array([l]))[0]
     trans = core_mass_matrices(rho, np.array([A]), np.array([0.0]), np.array([l]))[0]
@@ -113,7 +113,7 @@ def test_core_mass_is_hermite_translation_plus_linear_rotation_inertia():
 
 
 def test_matrices_are_the_energy_integrals_of_the_interpolation():
-    """§3.6: K_e = ∫ EI N_θ'ᵀN_θ' + κGA (N_w' − N_θ)ᵀ(N_w' − N_θ), M_e = ∫ ρA N_wᵀN_w + ρI N_θᵀN_θ."""
+    """Friedman & Kosmatka (1993) interpolation: K_e = ∫ EI N_θ'ᵀN_θ' + κGA (N_w' − N_θ)ᵀ(N_w' − N_θ), M_e = ∫ ρA N_wᵀN_w + ρI N_θᵀN_θ."""
     el = BeamElements(z=np.array([0.0, 0.007]), od=np.array([0.05]), id=np.array([0.016]), **STEEL)
     l, phi = el.length, el.phi()
     A, I = el.sections()
@@ -135,7 +135,7 @@ def test_matrices_are_the_energy_integrals_of_the_interpolation():
 
 
 def test_interpolation_reproduces_rigid_translation_and_rotation():
-    """§5.3 relies on it: N_w reproduces w = 1 and w = z, N_θ gives θ = 0 and θ = 1."""
+    """The contact matrices (docs/physics.md §1) rely on it: N_w reproduces w = 1 and w = z, N_θ gives θ = 0 and θ = 1."""
     l, phi = np.array([0.004]), np.array([3.0])
     xi = np.linspace(0, 1, 7)
     n_w, n_t = shape_functions(xi, l, phi)
@@ -146,7 +146,7 @@ def test_interpolation_reproduces_rigid_translation_and_rotation():
 
 
 def test_section_and_shear_parameter_follow_the_definitions():
-    """§3.1, §3.3: A, I of a tube and φ = 24 (1 + ν) I / (κ A l²), independent of E."""
+    """A, I of a tube and φ = 24 (1 + ν) I / (κ A l²), independent of E."""
     A, I = section_properties([0.05], [0.016])
     assert A[0] == pytest.approx(np.pi * (0.05**2 - 0.016**2) / 4)
     assert I[0] == pytest.approx(np.pi * (0.05**4 - 0.016**4) / 64)

@@ -1,4 +1,4 @@
-"""Mesh rules and properties of the assembled free-free system (MODEL.md §2, §5, §6)."""
+"""Mesh rules and properties of the assembled free-free system (docs/physics.md §1)."""
 
 import numpy as np
 import pytest
@@ -12,7 +12,7 @@ HOLDER_A = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.
 
 
 def test_mesh_has_nodes_at_every_breakpoint_and_coincident_contact_nodes(reference_assembly):
-    """§2: nodes at 0, segment boundaries, z_c0, the front face, the tool's back end and tip;
+    """Mesh breakpoints: nodes at 0, segment boundaries, z_c0, the front face, the tool's back end and tip;
     holder and tool nodes coincide in the contact zone."""
     mesh = build_mesh(reference_assembly)
     zh, zt = mesh.holder.z, mesh.tool.z
@@ -26,7 +26,7 @@ def test_mesh_has_nodes_at_every_breakpoint_and_coincident_contact_nodes(referen
 
 
 def test_mesh_is_graded_to_short_elements_at_both_zone_ends(reference_assembly):
-    """§5.3: the shortest elements sit at both ends of the contact zone: min(0.25 mm, 0.07 × the
+    """The graded mesh (docs/physics.md §1): the shortest elements sit at both ends of the contact zone: min(0.25 mm, 0.07 × the
     shortest boundary layer, ≈2.0 mm for a Ø16 carbide shank under the stiffest layer), ≤ 1 mm
     inside the zone, ≤ 2 mm elsewhere."""
     from taptune.model.mesh import boundary_layer_length
@@ -47,7 +47,7 @@ def test_mesh_is_graded_to_short_elements_at_both_zone_ends(reference_assembly):
 
 
 def test_mesh_scale_one_half_splits_every_element_in_two(reference_assembly):
-    """The convergence check of §5.3 halves exactly the elements of the default model."""
+    """The convergence check (docs/physics.md §1) halves exactly the elements of the default model."""
     base = build_model(reference_assembly)
     half = build_model(reference_assembly, ModelOptions(mesh_scale=0.5))
     assert np.array_equal(half.z_holder[::2], base.z_holder) and np.array_equal(half.z_tool[::2], base.z_tool)
@@ -56,7 +56,7 @@ def test_mesh_scale_one_half_splits_every_element_in_two(reference_assembly):
 
 
 def test_element_properties_come_from_the_segment_at_the_element_midpoint(reference_assembly):
-    """§2 rule 4 and §1.2: flutes are a Ø12.8 cylinder (0.8 × Ø16) over the last 32 mm."""
+    """docs/assembly-format.md, [tool]: flutes are a Ø12.8 cylinder (0.8 × Ø16) over the last 32 mm."""
     mesh = build_mesh(reference_assembly)
     t = mesh.tool
     mid = 0.5 * (t.z[:-1] + t.z[1:])
@@ -69,7 +69,7 @@ def test_element_properties_come_from_the_segment_at_the_element_midpoint(refere
 
 
 def test_global_matrices_are_symmetric_and_strain_free_under_rigid_motion(reference_assembly):
-    """§6: K̃, M symmetric (K̃ complex symmetric, not Hermitian); K̃ t = 0, K̃ r = 0; tᵀMt = total mass."""
+    """Assembled free-free system: K̃, M symmetric (K̃ complex symmetric, not Hermitian); K̃ t = 0, K̃ r = 0; tᵀMt = total mass."""
     fe = build_model(reference_assembly)
     K, M = fe.matrices(HOLDER_A)
     assert abs(K - K.T).max() <= 1e-12 * abs(K).max()
@@ -77,7 +77,7 @@ def test_global_matrices_are_symmetric_and_strain_free_under_rigid_motion(refere
     t, r = fe.rigid_vectors
     scale = abs(K).max()
     assert np.abs(K @ t).max() < 1e-9 * scale and np.abs(K @ r).max() < 1e-9 * scale
-    # §13.4: total mass 1.54559 kg with holder A's density 7478 kg/m³ (holder 1.34393 kg at
+    # Reference assembly: total mass 1.54559 kg with holder A's density 7478 kg/m³ (holder 1.34393 kg at
     # 7800 kg/m³ by hand, tool 0.2571 kg); the density factor scales only the holder.
     assert t @ (M @ t) == pytest.approx(1.54559, rel=1e-5)
     assert t @ (fe.M_holder @ t) == pytest.approx(1.34393, rel=1e-5)
@@ -94,7 +94,7 @@ def test_parameters_enter_affinely(reference_assembly):
 
 
 def test_contact_layer_totals_k_tt_times_contact_length_and_the_slope_averages_out(reference_assembly):
-    """§5.2: a unit relative translation strains the layer over L_c (uᵀT0u = 0.040 m, uᵀT1u = 0);
+    """The contact layer (docs/physics.md §1): a unit relative translation strains the layer over L_c (uᵀT0u = 0.040 m, uᵀT1u = 0);
     a relative rigid rotation about the zone middle gives ∫(z − z_m)² dz = L_c³/12 and a
     unit relative rotation over L_c, with zero ξ-weighted parts by symmetry."""
     fe = build_model(reference_assembly)
@@ -116,19 +116,19 @@ def test_contact_layer_totals_k_tt_times_contact_length_and_the_slope_averages_o
 
 
 def test_dof_bookkeeping_and_tip_dof(reference_assembly):
-    """§0.2: holder nodes then tool nodes, [w, θ] per node, tip w = second-to-last DOF."""
+    """DOF order: holder nodes then tool nodes, [w, θ] per node, tip w = second-to-last DOF."""
     fe = build_model(reference_assembly)
     assert fe.n_dofs == 2 * (len(fe.z_holder) + len(fe.z_tool))
     assert fe.tip_dof == fe.n_dofs - 2
     assert fe.z_nodes[fe.tip_dof // 2] == pytest.approx(0.1535)
     assert fe.n_elements == len(fe.z_holder) + len(fe.z_tool) - 2
     assert fe.K_tool.dtype == complex and fe.T0.dtype == float
-    # Default mesh of the reference assembly: a few hundred DOFs (§5.3).
+    # Default mesh of the reference assembly: a few hundred DOFs (docs/physics.md §1).
     assert 200 <= fe.n_dofs <= 500
 
 
 def test_rigid_contact_variant_ties_the_tool_to_the_holder_in_the_zone(reference_assembly):
-    """§7.6 / §13.4: tool DOFs in the zone become the holder's; still two rigid-body modes."""
+    """Rigid contact: tool DOFs in the zone become the holder's; still two rigid-body modes."""
     fe = build_model(reference_assembly)
     fr = rigid_contact_model(fe)
     n_tied = len(fe.contact_nodes)
@@ -171,7 +171,7 @@ def test_stubby_sections_get_elements_shorter_than_a_fortieth_of_the_wavelength(
 
     fe = build_model(reference_assembly)
     f3 = highest_bending_hz(fe)
-    assert 20000 < f3 < 25000  # the §13.4 rigid row (23005.9 Hz) times ≈ sqrt(1.10/0.95)
+    assert 20000 < f3 < 25000  # the rigid-contact f3 (23005.9 Hz) times ≈ sqrt(1.10/0.95)
     mesh = build_mesh(reference_assembly, ModelOptions(), f3)
     h = mesh.holder
     lam = bending_wavelength(reference_assembly.holder.segments, reference_assembly.holder.material, f3)
@@ -182,7 +182,7 @@ def test_stubby_sections_get_elements_shorter_than_a_fortieth_of_the_wavelength(
 
 
 def test_explicit_tool_segments_give_the_same_model_as_shank_and_flute_keys(reference_toml, tmp_path):
-    """ASSEMBLY-FORMAT.md: segments [61.5 × Ø16, 32 × Ø12.8] are the reference tool written out."""
+    """docs/assembly-format.md: segments [61.5 × Ø16, 32 × Ø12.8] are the reference tool written out."""
     from taptune.io.assembly import load_assembly
     from taptune.model.modes import solve_modes
 

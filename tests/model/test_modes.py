@@ -1,4 +1,4 @@
-"""Modes and receptances of the reference assembly (MODEL.md §7, converged values of §13.4)."""
+"""Modes and receptances of the reference assembly (docs/physics.md §3; converged values of two independent implementations)."""
 
 import numpy as np
 import pytest
@@ -21,7 +21,7 @@ MM = 1e-3
 
 
 def check(modes, f_ref, zeta_pct_ref):
-    """f1–f3 to 0.05 %, ζ1–ζ3 to 2 % (the tolerances of §13.4)."""
+    """f1–f3 to 0.05 %, ζ1–ζ3 to 2 % (the tolerances of the converged values)."""
     assert np.allclose(modes.frequency_hz[:3], f_ref, rtol=5e-4), modes.frequency_hz[:3]
     assert np.allclose(100 * modes.damping_ratio[:3], zeta_pct_ref, rtol=0.02), modes.damping_ratio[:3]
 
@@ -35,25 +35,25 @@ def check(modes, f_ref, zeta_pct_ref):
     ],
 )
 def test_holder_A_in_the_reference_assembly_matches_the_converged_table(reference_assembly, stickout_mm, f_ref, zeta_ref):
-    """§13.4: published holder A, Ø16 carbide tool in an ER32 HSK-A63 × 100 holder, three stick-outs
+    """Published holder A (CIRP J. Manuf. Sci. Technol. 37, 2022), Ø16 carbide tool in an ER32 HSK-A63 × 100 holder, three stick-outs
     (L_c = 40, 30, 20 mm); converged continuous-contact values of two independent implementations."""
     asm = reference_assembly.with_stickout(stickout_mm * MM)
     check(solve_modes(build_model(asm), HOLDER_A), f_ref, zeta_ref)
 
 
 def test_rigid_contact_reference_assembly_matches_the_table(reference_assembly):
-    """§13.4: tool tied to the holder in the zone: 5787.9 / 15392.2 / 23005.9 Hz, ζ 0.105 / 0.140 / 0.116 %."""
+    """Tool tied to the holder in the zone: 5787.9 / 15392.2 / 23005.9 Hz, ζ 0.105 / 0.140 / 0.116 %."""
     fe = rigid_contact_model(build_model(reference_assembly))
     check(solve_modes(fe, HOLDER_A), (5787.9, 15392.2, 23005.9), (0.105, 0.140, 0.116))
 
 
 def test_nominal_parameters_in_the_reference_assembly_match_the_table(reference_assembly):
-    """§13.4 / §8.1 nominal set: 4797.3 / 14836.9 / 20088.8 Hz, ζ 0.394 / 0.193 / 0.301 %."""
+    """Nominal parameters (docs/physics.md §2): 4797.3 / 14836.9 / 20088.8 Hz, ζ 0.394 / 0.193 / 0.301 %."""
     check(solve_modes(build_model(reference_assembly), NOMINAL), (4797.3, 14836.9, 20088.8), (0.394, 0.193, 0.301))
 
 
 def test_tip_receptance_at_1_khz_matches_the_reference(reference_assembly):
-    """§13.4: H_tt(1000 Hz) ≈ −9.178e-8 − 2.25e-10 i m/N for holder A at 53.5 mm."""
+    """H_tt(1000 Hz) ≈ −9.178e-8 − 2.25e-10 i m/N for holder A at 53.5 mm."""
     fe = build_model(reference_assembly)
     for method in ("modal", "direct"):
         h = tip_receptance(fe, HOLDER_A, [1000.0], method=method)[0]
@@ -62,7 +62,7 @@ def test_tip_receptance_at_1_khz_matches_the_reference(reference_assembly):
 
 
 def test_modal_receptance_agrees_with_the_direct_solution(reference_assembly):
-    """§7.3 vs §7.4: rigid terms + 12 lowest modes + first-order residual of the others reproduce
+    """Modal sum vs direct solve (docs/physics.md §3): rigid terms + 12 lowest modes + first-order residual of the others reproduce
     the direct solve (1e-6 of the peak up to 25 kHz, 1e-6 relative in the ±100 Hz window of mode 1);
     with every mode (dense solve) they agree to round-off."""
     fe = build_model(reference_assembly)
@@ -79,7 +79,7 @@ def test_modal_receptance_agrees_with_the_direct_solution(reference_assembly):
 
 
 def test_modes_are_mass_normalised_and_orthogonal_without_conjugation(reference_assembly):
-    """§7.1: φᵀMφ = 1 and φ_rᵀ M φ_s = φ_rᵀ K̃ φ_s = 0 (r ≠ s) for the complex symmetric K̃."""
+    """Mass-normalised complex modes: φᵀMφ = 1 and φ_rᵀ M φ_s = φ_rᵀ K̃ φ_s = 0 (r ≠ s) for the complex symmetric K̃."""
     fe = build_model(reference_assembly)
     modes = solve_modes(fe, HOLDER_A, 6)
     K, M = fe.matrices(HOLDER_A)
@@ -89,7 +89,7 @@ def test_modes_are_mass_normalised_and_orthogonal_without_conjugation(reference_
     assert np.allclose(modes.loss_factor, modes.eigenvalues.imag / modes.eigenvalues.real)
     assert np.allclose(modes.damping_ratio, modes.loss_factor / 2)
     assert np.all(np.diff(modes.frequency_hz) > 0)
-    # §7.2: the numerical rigid-body pair is far below 1 Hz.
+    # The numerical rigid-body pair is far below 1 Hz.
     assert np.all(modes.rigid_hz < 1.0)
 
 
@@ -101,7 +101,7 @@ def test_exact_rigid_body_modes_are_mass_orthonormal(reference_assembly):
 
 
 def test_disconnected_tool_and_holder_raise_a_clear_error(reference_assembly):
-    """§7.2: without contact there are four zero eigenvalues: a ModelError, not a wrong answer."""
+    """Without contact there are four zero eigenvalues: a ModelError, not a wrong answer."""
     fe = build_model(reference_assembly)
     loose = HolderParams(k_tt=0.0, k_rr=0.0, eta_tt=0.0, eta_rr=0.0)
     with pytest.raises(ModelError, match="not connected"):
@@ -109,7 +109,7 @@ def test_disconnected_tool_and_holder_raise_a_clear_error(reference_assembly):
 
 
 def test_soft_contact_modes_are_flagged_as_tool_rocking(reference_assembly):
-    """§7.6: with the softest contact of the search space mode 1 stores most strain energy in the layer."""
+    """With the softest contact of the search space mode 1 stores most strain energy in the layer."""
     fe = build_model(reference_assembly)
     soft = HolderParams(k_tt=1e4, k_rr=1e2, eta_tt=1e-3, eta_rr=1e-3)
     modes = solve_modes(fe, soft, 3)
@@ -155,9 +155,9 @@ def test_first_mode_shape_is_a_free_free_bending_shape_with_two_nodes(reference_
 
 
 def test_core_mass_variant_barely_moves_the_reference_assembly(reference_assembly):
-    """§3.5: mass="core" changes f1–f3 by less than 0.01 % and f4 by at most 0.5 % (holder A, 53.5 mm).
+    """mass="core" (the published method's mass: Hermite translation, linear-rotation rotary inertia) changes f1–f3 by less than 0.01 % and f4 by at most 0.5 % (holder A, 53.5 mm).
 
-    §3.5's 0.5 % for f4 is a coarse-mesh figure: both mass matrices converge to the same
+    The 0.5 % for f4 is a coarse-mesh figure: both mass matrices converge to the same
     continuum, and on the default mesh f4 moves by ≈0.01 % only."""
     consistent = solve_modes(build_model(reference_assembly), HOLDER_A, 4).frequency_hz
     core = solve_modes(build_model(reference_assembly, ModelOptions(mass="core")), HOLDER_A, 4).frequency_hz
@@ -167,7 +167,7 @@ def test_core_mass_variant_barely_moves_the_reference_assembly(reference_assembl
 
 
 def test_cowper_shear_coefficient_shifts_the_reference_assembly_slightly(reference_assembly):
-    """§3.2: Cowper's κ is smaller than Hutchinson's, so every frequency drops a little (≲ 1 %)."""
+    """Cowper's κ is smaller than Hutchinson's, so every frequency drops a little (≲ 1 %)."""
     hutchinson = solve_modes(build_model(reference_assembly), HOLDER_A, 3).frequency_hz
     cowper = solve_modes(build_model(reference_assembly, ModelOptions(shear="cowper")), HOLDER_A, 3).frequency_hz
     assert np.all(cowper < hutchinson) and np.all(cowper > 0.99 * hutchinson)

@@ -3,7 +3,7 @@
 Short and long contact zones (down to 2 mm), tools from Ø4 to Ø25, bores larger than the
 shank, tools reaching deeper than the clamp: every one must mesh with coincident contact
 nodes, keep exactly two rigid-body modes and (slow) meet the convergence requirement of
-MODEL.md §5.3 at the corners of the search space that stress the mesh most. Holders and
+docs/physics.md §1 at the corners of the search space that stress the mesh most. Holders and
 tools are at least 50 mm long, as any tap-tested HSK assembly is: a 39 mm holder with a
 49 mm tool has its third mode near 45 kHz, far above what a microphone records, and
 there the default mesh is 0.052 % from converged.
@@ -65,7 +65,7 @@ def test_any_valid_assembly_gives_a_connected_free_free_model(asm):
 @pytest.mark.slow
 @pytest.mark.parametrize("asm", random_assemblies(5, 40), ids=lambda a: a.source)
 def test_random_assemblies_meet_the_convergence_requirement_at_hard_corners(asm):
-    """§5.3: halving every element changes f1–f3 by < 0.05 % and ζ1 by < 1 %."""
+    """Mesh convergence (docs/physics.md §1): halving every element changes f1–f3 by < 0.05 % and ζ1 by < 1 %."""
     fe, fe_half = build_model(asm), build_model(asm, ModelOptions(mesh_scale=0.5))
     for bits in ((1, 1, 1, 1, 1, 0, 1), (0, 1, 1, 0, 0, 0, 1), (0, 1, 0, 1, 0, 1, 1), (1, 0, 1, 0, 1, 1, 0), (0, 0, 0, 0, 0, 1, 0)):
         params = from_p(np.where(np.array(bits) == 1, P_UPPER, P_LOWER))

@@ -1,6 +1,6 @@
 """The fast reduced evaluator reproduces the full converged model over the whole search space.
 
-Accuracy required of the optimiser's evaluator (MODEL.md §7.5, §8.1, §8.4), measured on
+Accuracy required of the optimiser's evaluator (docs/physics.md §4), measured on
 seeded Latin-hypercube points and corners of the bounds of p:
   * f1–f3 within 0.01 % of the full model;
   * ζ1 within 0.5 %;
@@ -31,7 +31,7 @@ HOLDER_A = HolderParams(1.90e9, 9.37e3, 1.98e-3, 8.20e-3, -10.0, 7478 / 7800, 1.
 
 
 def assembly(name: str):
-    """The reference assembly of MODEL.md §13.4 or an assembly file of assets/."""
+    """The reference assembly (the example of docs/assembly-format.md) or an assembly file of assets/."""
     if name == "reference":
         return parse_assembly(tomllib.loads(REFERENCE_TOML), "reference.toml")
     return load_assembly(ASSETS / f"{name}.toml")
@@ -99,7 +99,7 @@ def test_reduced_model_matches_the_full_model_on_a_large_sweep(name):
 
 
 def test_holder_A_matches_the_converged_table(reference):
-    """MODEL.md §13.4: holder A at 53.5 mm, 4685.8 / 14934.8 / 19891.9 Hz, ζ1 = 0.391 %,
+    """Holder A at 53.5 mm (converged values of two independent implementations), 4685.8 / 14934.8 / 19891.9 Hz, ζ1 = 0.391 %,
     H_tt(1000 Hz) ≈ −9.178e-8 − 2.25e-10 i m/N (rigid-body terms included)."""
     _, ev = reference
     e = ev.evaluate(to_p(HOLDER_A), [1000.0])
@@ -264,7 +264,7 @@ def test_dense_fallback_gives_the_same_answer(reference):
 
 
 def test_low_frequency_receptance_is_the_rigid_body_mass_line(reference):
-    """Far below mode 1 the free-free tip receptance tends to −(1/m + d²/J)/ω² (MODEL.md §13.3):
+    """Far below mode 1 the free-free tip receptance tends to −(1/m + d²/J)/ω² (rigid-body mass and inertia):
     the reduced model keeps the exact rigid-body terms."""
     fe, ev = reference
     h_full = tip_receptance(fe, NOMINAL, [5.0, 50.0], method="direct")

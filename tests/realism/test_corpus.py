@@ -38,7 +38,7 @@ def test_deviations_stay_within_the_issue_limits(cases):
         assert 0.72 <= c.true_flute_ratio <= 0.86
         assert 0 <= c.holder.asymmetry <= 0.015
         p = c.holder.params
-        # Published ranges of MODEL.md §8.1 (five real holders).
+        # Published ranges of docs/physics.md §2 (five real holders).
         assert 1.8e9 <= p.k_tt <= 4.7e9 and 2.95e3 <= p.k_rr <= 4.83e4
         assert -23 <= p.alpha <= 11
         assert 7428 / 7800 <= p.density_factor <= 8045 / 7800

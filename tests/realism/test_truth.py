@@ -15,7 +15,7 @@ from taptune.model.options import ModelOptions
 from taptune.model.params import HolderParams
 from tests.conftest import REPO
 
-# Published holder A (MODEL.md §13.4).
+# Published holder A (CIRP J. Manuf. Sci. Technol. 37, 2022).
 HOLDER_A = HolderParams(k_tt=1.90e9, k_rr=9.37e3, eta_tt=1.98e-3, eta_rr=8.20e-3, alpha=-10.0,
                         density_factor=7478 / 7800, modulus_factor=1.0)
 
@@ -33,7 +33,7 @@ def f1_to_f3(asm, holder):
                                                 ("shrinkfit_hsk63_d12", 48.0), ("er32_hsk63_d6", 30.0)])
 def test_linear_profile_without_deviations_is_the_product_model(asset, stickout_mm):
     # Halved mesh and 12-point profile quadrature against the product's default model: the
-    # only difference left is mesh convergence, which MODEL.md §5.3 bounds by 0.05 %.
+    # only difference left is mesh convergence, which docs/physics.md §1 bounds by 0.05 %.
     asm = load_assembly(REPO / "assets" / f"{asset}.toml").with_stickout(stickout_mm * 1e-3)
     product = solve_modes(build_model(asm), HOLDER_A, 3).frequency_hz
     truth = f1_to_f3(asm, TruthHolder(HOLDER_A))
@@ -41,7 +41,7 @@ def test_linear_profile_without_deviations_is_the_product_model(asset, stickout_
 
 
 def test_reference_assembly_matches_the_published_converged_values(er32):
-    # MODEL.md §13.4, holder A at 53.5 and 63.5 mm: 4685.8 / 14934.8 / 19891.9 and 3748.4 / 13124.7 / 17765.9 Hz.
+    # Holder A at 53.5 and 63.5 mm (converged values of two independent implementations): 4685.8 / 14934.8 / 19891.9 and 3748.4 / 13124.7 / 17765.9 Hz.
     np.testing.assert_allclose(f1_to_f3(er32, TruthHolder(HOLDER_A)), [4685.8, 14934.8, 19891.9], rtol=5e-4)
     np.testing.assert_allclose(f1_to_f3(er32.with_stickout(0.0635), TruthHolder(HOLDER_A)),
                                [3748.4, 13124.7, 17765.9], rtol=5e-4)
