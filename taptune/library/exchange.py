@@ -8,7 +8,7 @@
 * :func:`import_library` validates a whole file first (plain JSON, never executed or
   unpickled), then merges it under the library lock and reports what it did.
 * :func:`holder_receptance` predicts the tool-tip receptance of a library holder with
-  another tool or stick-out (MODEL.md §9); :func:`write_receptance_csv` and
+  another tool or stick-out (docs/physics.md §6); :func:`write_receptance_csv` and
   :func:`write_receptance_uff58` write it for other software (pyuff imported lazily).
 
 Every file is written atomically (:func:`taptune.io.atomic.atomic_write`). The functions

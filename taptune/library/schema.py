@@ -12,7 +12,7 @@ holder parameters in library units, see :mod:`taptune.model.params`)::
      "holder": {"name", "interface", "clamp_length", "material": {"density",
                 "youngs_modulus", "poisson", "loss_factor"}, "segments": [{"length", "od", "id"}]},
      "params": {"k_tt", "k_rr", "eta_tt", "eta_rr", "alpha", "density_factor", "modulus_factor"},
-     "param_sets": [PARAMS, ...],                       # near-optimal sets (MODEL.md §8.6)
+     "param_sets": [PARAMS, ...],                       # near-optimal sets (docs/physics.md §5)
      "model_options": {"h_max_mm": 2.0, ...},           # ModelOptions.to_dict()
      "identifications": [{"recording": "tap.wav", "sha256": "<64 hex>",
                           "tool": {"name", "total_length", "material", "segments",
@@ -458,7 +458,7 @@ class ProvenanceRecord:
     date : str
         When the identification ran, ISO-8601 UTC.
     objective : float
-        Final objective value J (MODEL.md §8.4).
+        Final objective value J (docs/physics.md §4).
     seed : int or None
         Optimiser seed (None if the run was not seeded).
     evaluations : int
@@ -653,9 +653,9 @@ class HolderEntry:
     params : HolderParams
         The best parameters.
     param_sets : tuple of HolderParams
-        Near-optimal parameter sets (MODEL.md §8.6); their spread is the uncertainty.
+        Near-optimal parameter sets (docs/physics.md §5); their spread is the uncertainty.
     model_options : dict
-        The model options the parameters were identified with (MODEL.md §5.3).
+        The model options the parameters were identified with (docs/physics.md §1).
     identifications : tuple of ProvenanceRecord
         Every identification of this holder, oldest first.
     checks : tuple of CheckRecord

@@ -1,4 +1,4 @@
-"""Library entries for the tests, built from the reference assembly (MODEL.md §13.4).
+"""Library entries for the tests, built from the reference assembly (the example of docs/assembly-format.md).
 
 A plain module (not a conftest) so that the worker processes of the concurrency tests
 can import it too.
