@@ -87,6 +87,10 @@ def settle(window, predictor_timeout_s: float = 30.0) -> None:
         wait_for(window.predictor.predicted, predictor_timeout_s)
     if window.machine.busy:
         wait_for(window.machine.updated, predictor_timeout_s)
+    # The picture shows what the machinist sees once the semi-discretization and its band
+    # are drawn over the preview (the SDM takes seconds, not the slider's 0.3 s).
+    if window.machine.refining:
+        wait_for(window.machine.refined, 4 * predictor_timeout_s)
     for _ in range(3):
         loop = QEventLoop()
         QTimer.singleShot(50, loop.quit)

@@ -31,8 +31,8 @@ from taptune.gui.check_view import checks_html
 from taptune.gui.fit_view import PARAM_ROWS
 from taptune.gui.layout import hsplit
 from taptune.gui.messages import show_error, show_info
+from taptune.gui.numbers import NOT_DETERMINED, determined, number
 from taptune.gui.signals import emit
-
 from taptune.library.schema import date_label
 
 COLUMNS = ("holder", "interface", "identified", "last identified", "last check")
@@ -42,16 +42,25 @@ PAGE_SIZE = 100
 SEARCH_DELAY_MS = 250
 
 
+def _param_row(label: str, value: float, spread: float, unit: str, fmt: str) -> str:
+    """One parameter as a table row; a spread wider than the value reads 'not determined' (as in the Fit view)."""
+    e = html.escape
+    # Labels keep their words whole: the details pane is narrow at 1366×768.
+    name = f"<td style='white-space:nowrap'>{e(label)}</td>"
+    if determined(value, spread):
+        return (f"<tr>{name}<td align=right>{e(number(value, fmt))}</td>"
+                f"<td align=right>± {e(number(spread, fmt))}</td><td>{e(unit)}</td></tr>")
+    return (f"<tr>{name}<td colspan=2 align=center style='color:#666666'>{NOT_DETERMINED}</td>"
+            f"<td>{e(unit)}</td></tr>")
+
+
 def entry_html(entry) -> str:
     """A readable description of a library entry: geometry, parameters with spread, history."""
     e = html.escape
     h = entry.holder
     spread = entry.spread()
-    rows = "".join(
-        f"<tr><td>{e(label)}</td><td align=right>{fmt.format(getattr(entry.params, key))}</td>"
-        f"<td align=right>± {fmt.format(spread[key])}</td><td>{e(unit)}</td></tr>"
-        for key, label, unit, fmt in PARAM_ROWS
-    )
+    rows = "".join(_param_row(label, getattr(entry.params, key), spread[key], unit, fmt)
+                   for key, label, unit, fmt in PARAM_ROWS)
     segments = ", ".join(f"{s['length']:g}×Ø{s['od']:g}/{s['id']:g}" for s in h.get("segments", []))
     history = "".join(
         f"<li>{e(date_label(r.date))}: {e(r.recording)}, {e(r.tool_name)} at {r.stickout_mm:g} mm, "

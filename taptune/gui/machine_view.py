@@ -445,7 +445,7 @@ class MachineView(QWidget):
         art["cap"].set_visible(bool(np.isfinite(cap)))
         if np.isfinite(cap):
             art["cap"].set_ydata([cap, cap])
-        ax_l.set_title("Stability lobes: zero-order preview (semi-discretization follows)", loc="left")
+        ax_l.set_title("Stability lobes (zero-order preview)", loc="left")
         a_crit = lobes.a_crit / MM
         best = lobes.pockets[0] if lobes.pockets else None
         self._mark(a_crit, None if best is None else (best[0], best[1] / MM, f"{best[0]:,.0f} rpm\n{best[1] / MM:.2g} mm"))
@@ -480,7 +480,7 @@ class MachineView(QWidget):
             best.rpm, best.a / MM, f"{best.rpm_low:,.0f}–{best.rpm_high:,.0f} rpm\n{best.a / MM:.2g} mm "
                                    f"({100 * band.confidence:.0f} %)"))
         kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
-        ax_l.set_title(f"Stability lobes ({kind}): stable below the line", loc="left")
+        ax_l.set_title(f"Stability lobes ({kind})", loc="left")
         self.cut_panel.mark(ax_l)
         self.canvas.draw_idle()
 
