@@ -159,6 +159,9 @@ def main(argv=None) -> None:
     print(f"\n{len(rows)} cuts ({n_chatter} chatter by the linear growth), {time.time() - t0:.0f} s; "
           f"{len(diverged)} left out (the simulation with loss of contact diverged: > 1 mm)")
     print(f"verdicts right on clear cases: {len(right)}/{len(clear)} = {100 * len(right) / max(len(clear), 1):.0f} %")
+    for cfg in CONFIGS:
+        mine = [r for r in clear if r["cfg"] == cfg["name"]]
+        print(f"   {cfg['name']}: {sum(r in right for r in mine)}/{len(mine)}")
     for r in clear:
         if r["verdict"] != r["truth"].kind:
             a = r["a"]

@@ -226,19 +226,25 @@ def render_cuts(batch: dict, *, commanded_rpm: float | None = None, seed: int = 
         vib, force = vib[skip:], force[skip:]
         # Each part in units of its robust scale over the steady two thirds (a median, so that
         # a run whose chatter bursts once is not scaled by that burst), bursts clipped at 8×.
-        def robust(x):
+        # A part that barely varies stays quiet: the scale is never below 1 % of the static
+        # deflection's (for the acceleration: × (2π f_tp)²) or of the mean force. An ideal
+        # 4-tooth slot's force is constant; its simulated vibration is arithmetic noise
+        # (~1e-21 m, a steady tone), which a scale of its own would blow up into a chatter.
+        f_tp = rpm * teeth / 60.0
+
+        def robust(x, floor):
             x = x - x.mean()
-            # A cut whose steady force does not vary (slotting with 4 teeth) stays quiet: no smaller
-            # a scale than a thousandth of the whole run's.
-            scale = max(1.4826 * np.median(np.abs(x[len(x) // 3:])), 1e-3 * np.std(x)) + 1e-30
+            scale = max(1.4826 * np.median(np.abs(x[len(x) // 3:])), 1e-3 * np.std(x), floor) + 1e-30
             return np.clip(x / scale, -8, 8)
 
-        acc = np.gradient(np.gradient(vib))
+        acc = np.gradient(np.gradient(vib)) * FS**2
         g = 10 ** (rng.uniform(-6, 6) / 20)
-        sound = robust(acc) + g * robust(force)
+        sound = robust(acc, 0.01 * (2 * np.pi * f_tp) ** 2 * abs(np.mean(vib))) + g * robust(force, 0.01 * abs(np.mean(force)))
+        # A unit cut level (a quiet cut is not turned up to it).
+        sound = sound / max(float(np.sqrt(np.mean(sound**2))), 1.0)
         f_c, level = vibration_levels(vib, FS, rpm, teeth)
         chatter = bool(growth > 1.0)
-        rec = shop_sound(sound, rpm, teeth, rng=rng, codec=codec, **shop)
+        rec = shop_sound(sound, rpm, teeth, rng=rng, codec=codec, normalise=False, **shop)
         out.append((as_recording(rec, lossy=bool(codec)),
                     CutTruth(rpm, commanded_rpm or rpm, teeth, f_c if chatter else None, level if chatter else None,
                              "chatter" if chatter else "stable"), float(growth)))

@@ -79,7 +79,8 @@ def _check(args):
 
 
 def _model_inputs(args):
-    """(entry, library, machine, frf, cut, diameter_mm, warnings, flute length [m] or None): what the lobes need, checked."""
+    """(entry, library, machine, frf, cut, diameter_mm, warnings, flute length [m] or None, the holder's band):
+    what the lobes need, checked."""
     from taptune.cli.cmd_toolpoint import frequency_grid, machine_inputs, toolpoint_frfs
     from taptune.cli.cut import cut_options, tool_diameter_mm
     from taptune.library.store import HolderLibrary, default_library_path
@@ -93,12 +94,15 @@ def _model_inputs(args):
     assembly, machine, holder, warnings = machine_inputs(ns, "cut")
     frfs, _ = toolpoint_frfs(assembly, machine, holder, frequency_grid(ns, machine), None, "distributed")
     flutes = assembly.tool.flute_length
+    from taptune.machine.band import band_from_prediction
+
+    band = band_from_prediction(entry.predict(assembly))
     diameter = cut.diameter_mm if cut.diameter_mm is not None else tool_diameter_mm(assembly)
     if cut.ae_mm > diameter * (1 + 1e-9):
         from taptune.errors import InputError
 
         raise InputError(f"--ae {cut.ae_mm:g} mm exceeds the tool diameter {diameter:g} mm")
-    return entry, library, machine, frfs[0], cut, diameter, warnings, flutes
+    return entry, library, machine, frfs[0], cut, diameter, warnings, flutes, band
 
 
 def run(args) -> int:
@@ -157,40 +161,42 @@ def run(args) -> int:
 
 
 def _with_lobes(args, analysis, model, min_rpm, max_rpm, warnings) -> dict:
-    """Lobes of the holder at this cut, the speeds they allow at its depth, the mode match, the observations."""
-    import numpy as np
-
+    """Lobes of the holder at this cut with its band weighed by the observed cuts (this one too), the
+    speeds they allow at its depth, the mode match, the cuts that contradict the lobes."""
     from taptune.library.exchange import frequency_grid as uniform_grid
-    from taptune.machine import stability_lobes
     from taptune.machine.next_speed import advise, observation_warnings
+    from taptune.machine.observed import comparable, lobes_with_observations
 
-    entry, library, machine, frf, cut, diameter, more, flutes = model
+    entry, library, machine, frf, cut, diameter, more, flutes, band = model
     warnings += [w for w in more if w not in warnings]
     # The speeds a machinist moves to after one cut: half to twice the present one, within the machine's range.
     n = analysis.spindle_rpm
     lo = max(min_rpm, LOBE_SPAN[0] * n)
     hi = min(max_rpm, LOBE_SPAN[1] * n) if max_rpm is not None else LOBE_SPAN[1] * n
     rpm = uniform_grid(lo, hi, max(1.0, round((hi - lo) / LOBE_SPEEDS)))
-    lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc, krc=cut.krc,
-                            diameter=diameter * 1e-3, ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm,
-                            method="auto", depth_cap=flutes or float("inf"))
-    warnings += [w for w in lobes.warnings if w not in warnings]
-    a_lim = np.asarray(lobes.a_lim)
-    a_safe = getattr(lobes, "a_lim_safe", None)
-    confidence = getattr(lobes, "confidence", None)
-    advice = advise(analysis, min_rpm=min_rpm, max_rpm=max_rpm, depth=args.depth * 1e-3, rpm=rpm,
-                    a_lim=a_lim if a_safe is None else np.asarray(a_safe), modes=frf.modes, holder=entry.name)
-    warnings += list(advice.warnings)
     seen = list(entry.observations) + [_observation(args, analysis, cut, None)]
-    warnings += [w for w in dict.fromkeys(observation_warnings(seen, rpm, a_lim, a_safe, confidence))
-                 if w not in warnings]
+    same = comparable(seen, teeth=cut.teeth, ae_mm=cut.ae_mm, milling=cut.milling, ktc_mpa=cut.ktc / 1e6,
+                      krc_mpa=cut.krc / 1e6)
+    lobes, observed = lobes_with_observations(
+        frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc, krc=cut.krc, diameter=diameter * 1e-3,
+        ae=cut.ae_mm * 1e-3, milling=cut.milling, rpm=rpm, method="auto", band=band,
+        depth_cap=flutes or float("inf"), cuts=[(o.rpm, o.depth_mm * 1e-3, o.verdict) for o in same])
+    warnings += [w for w in lobes.warnings if w not in warnings]
+    safe = observed.band
+    advice = advise(analysis, min_rpm=min_rpm, max_rpm=max_rpm, depth=args.depth * 1e-3, rpm=rpm,
+                    a_lim=safe.a_safe if safe.samples > 1 else lobes.a_lim, modes=frf.modes, holder=entry.name)
+    warnings += list(advice.warnings)
+    # Without a band (one sample) the cuts are checked against the central lobes with a margin.
+    contradictions = observed.warnings if safe.samples > 1 else observation_warnings(same, rpm, lobes.a_lim)
+    warnings += [w for w in dict.fromkeys(contradictions) if w not in warnings]
     summary = advice.lobes.to_dict() | {"method": getattr(lobes, "method", "zoa"), "a_crit_mm": lobes.a_crit * 1e3,
                                         "chatter_hz_tool": advice.chatter_hz,
                                         "chatter_matches_tool_mode": advice.matches_tool,
                                         "tool_mode_hz": advice.tool_mode_hz,
-                                        "observations": len(seen) - (1 if args.no_save else 0)}
+                                        "observations": len(seen) - (1 if args.no_save else 0),
+                                        "band": safe.sources} | observed.to_dict()
     return {"suggested_rpm": [round(n) for n in advice.suggested_rpm], "summary": summary, "lobes": lobes,
-            "observations": seen, "cut": cut, "diameter": diameter, "holder": entry.name}
+            "band": safe, "observations": seen, "cut": cut, "diameter": diameter, "holder": entry.name}
 
 
 def _observation(args, analysis, cut, sha):
@@ -234,6 +240,10 @@ def _print(args, analysis, out, lobes_info) -> None:
               + (f"{now:.3g} mm" if now is not None else "unknown") + f" (cut {args.depth:g} mm); "
               f"{s['observations']} cut(s) observed with {lobes_info['holder']}"
               + ("" if args.no_save else " (this one saved)"))
+        if s["observed_cuts_used"] and s["band_width_before_pct"] > 0:
+            print(f"band:      {s['observed_cuts_used']} cut(s) of this kind narrow the holder's band of tool-point "
+                  f"frequencies from {s['band_width_before_pct']:.1f} % to {s['band_width_after_pct']:.1f} % wide "
+                  f"(shifted {s['toolpoint_frequency_shift_pct']:+.1f} %)")
 
 
 def _plot(args, analysis, lobes_info) -> None:
@@ -242,5 +252,6 @@ def _plot(args, analysis, lobes_info) -> None:
     lobes = None
     if lobes_info is not None:
         lb = lobes_info["lobes"]
-        lobes = (lb.rpm, lb.a_lim, getattr(lb, "a_lim_safe", None), lobes_info["observations"], args.depth)
+        band = lobes_info["band"]
+        lobes = (lb.rpm, lb.a_lim, band.a_safe if band.samples > 1 else None, lobes_info["observations"], args.depth)
     plot_cut(analysis, args.plot, lobes=lobes, title=args.wav)

@@ -215,6 +215,15 @@ class CutPanel(QWidget):
         cut = self.view.cut()
         return [o for o in out if o.teeth == cut.teeth and o.milling == cut.milling]
 
+    def observed_cuts(self) -> list:
+        """(rpm, depth [m], verdict) of the observed cuts made with the view's cut: they weigh its band."""
+        from taptune.machine.observed import comparable
+
+        c = self.view.cut()
+        same = comparable(self.observations(), teeth=c.teeth, ae_mm=c.ae_mm, milling=c.milling, ktc_mpa=c.ktc_mpa,
+                          krc_mpa=c.krc_mpa)
+        return [(o.rpm, o.depth_mm * 1e-3, o.verdict) for o in same]
+
     def mark(self, ax) -> None:
         """Draw the observed cuts on the lobes' axes ``ax`` (replacing the previous marks)."""
         for artist in self._marks:

@@ -103,21 +103,23 @@ def depth_cap(assembly) -> float:
     return flute if flute is not None else float("inf")
 
 
-def compute_refined(source, stickout_mm: float, frf, cut: Cut, confidence: float = 0.9):
+def compute_refined(source, stickout_mm: float, frf, cut: Cut, confidence: float = 0.9, cuts=()):
     """``(stickout_mm, cut, Lobes, LobeBand)``: the semi-discretization lobes of ``frf`` with the
-    holder's prediction band (its near-optimal sets, the geometry tolerances, the model form) (worker)."""
+    holder's prediction band (its near-optimal sets, the geometry tolerances, the model form),
+    weighed by the observed ``cuts`` (rpm, depth [m], verdict) of this cut (worker)."""
     from taptune.identify.core import predict
     from taptune.library.exchange import frequency_grid
-    from taptune.machine.band import band_from_prediction, lobes_with_band
+    from taptune.machine.band import band_from_prediction
+    from taptune.machine.observed import lobes_with_observations
 
     assembly = source.assembly.with_stickout(stickout_mm * MM)
     band = band_from_prediction(predict(list(source.param_sets), assembly, source.model_options))
-    lobes, lobe_band = lobes_with_band(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
+    lobes, observed = lobes_with_observations(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
                                        krc=cut.krc_mpa * 1e6, diameter=cut.diameter_mm * MM, ae=cut.ae_mm * MM,
                                        milling=cut.milling, rpm=frequency_grid(cut.rpm_min, cut.rpm_max, RPM_STEP),
                                        method="auto", confidence=confidence, band=band,
-                                       depth_cap=depth_cap(assembly))
-    return stickout_mm, cut, lobes, lobe_band
+                                       depth_cap=depth_cap(assembly), cuts=cuts)
+    return stickout_mm, cut, lobes, observed.band
 
 
 def tool_teeth(name: str) -> int | None:
@@ -390,7 +392,8 @@ class MachineView(QWidget):
         self.summary.setText(summary_text(self.source, frf, lobes) + " <i>Semi-discretization and band follow…</i>")
         self.draw(stickout_mm, frf, lobes)
         emit(self.updated, result)
-        self._refines.request(compute_refined, self.source, stickout_mm, frf, self.cut())
+        self._refines.request(compute_refined, self.source, stickout_mm, frf, self.cut(), 0.9,
+                             self.cut_panel.observed_cuts())
 
     def _show_refined(self, result) -> None:
         stickout_mm, cut, lobes, band = result

@@ -13,13 +13,25 @@ model, the cut's own variation; :data:`SIGMA`); ``unclear`` cuts carry no weight
 sets' weights are the products over the cuts (Bayes with equal priors), and the band is
 the weighted spread of their limits per speed.
 
+In the product the sets are the samples of the holder's band (:mod:`taptune.machine.band`:
+every tool-point modal frequency × s, stiffness × s², limit s² a(n/s)), so weighing them
+costs one interpolation per sample and cut. The weighted samples give the band again
+(resampled at evenly spaced quantiles of their weights: the safe depth and the safe
+pockets are then computed as without observations), how much it narrowed, and the cuts
+that contradict a prediction made with ≥ P confidence.
+
 Signatures::
 
     set_weights(limits, depths, verdicts, sigma=SIGMA) -> ndarray (n_sets,)
     weighted_band(a_lim, weights, quantiles=(0.05, 0.5, 0.95)) -> ndarray (len(quantiles), n_speeds)
+    comparable(observations, *, teeth, ae_mm, milling, ktc_mpa, krc_mpa) -> list
+    observed_band(rpm_ext, a_ext, inner, scales, cuts, confidence, depth_cap=inf, sources="") -> ObservedBand
+    lobes_with_observations(freq_hz, phi_xx, phi_yy, *, cuts, band, ..., confidence=0.9) -> (Lobes, ObservedBand)
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -70,3 +82,176 @@ def weighted_band(a_lim, weights, quantiles=(0.05, 0.5, 0.95)) -> np.ndarray:
         i = np.argmax(cw >= q - 1e-12, axis=0)
         out[k] = sa[i, np.arange(a.shape[1])]
     return out
+
+
+#: Observed cuts count for these lobes when their cut is the same: teeth and milling equal,
+#: radial depth and cutting coefficients within this fraction.
+SAME_CUT = 0.05
+
+
+def comparable(observations, *, teeth: int, ae_mm: float, milling: str, ktc_mpa: float, krc_mpa: float) -> list:
+    """The observed cuts (:class:`taptune.library.observations.CutObservation`-like) made
+    with the same cut as the lobes (same teeth and milling, ae and K_tc, K_rc within
+    :data:`SAME_CUT`): only they test these lobes."""
+    def close(a, b):
+        return abs(a - b) <= SAME_CUT * max(abs(b), 1e-12)
+
+    return [o for o in observations if o.teeth == teeth and o.milling == milling and close(o.ae_mm, ae_mm)
+            and close(o.ktc_mpa, ktc_mpa) and close(o.krc_mpa, krc_mpa)]
+
+
+@dataclass(frozen=True)
+class ObservedBand:
+    """The holder's band before and after weighing its samples by the observed cuts.
+
+    Attributes
+    ----------
+    prior, band : taptune.machine.band.LobeBand
+        Without and with the observations (``band`` is ``prior`` when no cut counts).
+    weights : ndarray
+        Weight of each sample (sum 1; equal without cuts).
+    scales : ndarray
+        The samples' frequency factors s.
+    cuts : int
+        Observed cuts that carried weight (stable or chatter, inside the speed grid).
+    width_before, width_after : float
+        Central ``confidence`` interval of s (its relative width: the band of the tool-point
+        frequencies the lobes allow).
+    shift : float
+        The weighted median of s less 1 (the observations' shift of the tool-point frequencies).
+    warnings : tuple of str
+    """
+
+    prior: object
+    band: object
+    weights: np.ndarray
+    scales: np.ndarray
+    cuts: int
+    width_before: float
+    width_after: float
+    shift: float
+    warnings: tuple = ()
+
+    @property
+    def narrowing(self) -> float:
+        """Fraction by which the observations narrowed the band of s (0: not at all)."""
+        return 1.0 - self.width_after / self.width_before if self.width_before > 0 else 0.0
+
+    def to_dict(self) -> dict:
+        return {"observed_cuts_used": self.cuts, "band_width_before_pct": 100 * self.width_before,
+                "band_width_after_pct": 100 * self.width_after, "band_narrowed_pct": 100 * self.narrowing,
+                "toolpoint_frequency_shift_pct": 100 * self.shift}
+
+
+def _weighted_quantile(x, w, q) -> float:
+    order = np.argsort(x)
+    cw = np.cumsum(np.asarray(w, float)[order])
+    return float(np.asarray(x, float)[order][min(np.searchsorted(cw, q * cw[-1] - 1e-12), len(x) - 1)])
+
+
+def resampled(scales, weights) -> np.ndarray:
+    """As many factors as ``scales``, drawn at evenly spaced quantiles of the weights (systematic
+    resampling, deterministic): equal-weight samples that the band's quantiles can take as they are."""
+    s = np.asarray(scales, float)
+    cw = np.cumsum(weights) / np.sum(weights)
+    i = np.searchsorted(cw, (np.arange(len(s)) + 0.5) / len(s))
+    return s[np.minimum(i, len(s) - 1)]
+
+
+def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float, depth_cap: float = np.inf,
+                  sources: str = "", sigma: float = SIGMA) -> ObservedBand:
+    """The band of :func:`taptune.machine.band.lobe_band` with its samples weighed by the observed ``cuts``.
+
+    Parameters
+    ----------
+    rpm_ext, a_ext, inner, scales, confidence, depth_cap, sources
+        As :func:`taptune.machine.band.lobe_band` (central lobes on the extended grid [rpm, m]).
+    cuts : sequence of (rpm, depth [m], verdict)
+        Observed cuts with the same cut as the lobes; those outside the requested speed grid
+        and ``unclear`` ones carry no weight.
+    sigma : float
+        Relative scatter of a limit the samples do not capture (:data:`SIGMA`).
+
+    Returns
+    -------
+    ObservedBand
+        With a warning per cut that contradicts a prediction made with ≥ ``confidence``
+        (chatter where ≥ P of the samples are stable, stable where ≥ P chatter), and one when
+        the cuts point beyond the band (the best samples are its outermost).
+    """
+    from taptune.machine.band import lobe_band, safe_pockets, sample_limits, LobeBand
+
+    s = np.asarray(scales, float)
+    rpm = np.asarray(rpm_ext, float)[inner]
+    prior = lobe_band(rpm_ext, a_ext, inner, s, confidence, depth_cap, sources)
+    inside = [(float(n), float(d), v) for n, d, v in cuts
+              if v in ("stable", "chatter") and rpm[0] <= n <= rpm[-1] and d > 0]
+    lo_q, hi_q = (1 - confidence) / 2, (1 + confidence) / 2
+    equal = np.full(len(s), 1.0 / len(s))
+    width0 = (_weighted_quantile(s, equal, hi_q) - _weighted_quantile(s, equal, lo_q))
+    if not inside or len(s) == 1:
+        return ObservedBand(prior, prior, equal, s, 0, width0, width0, _weighted_quantile(s, equal, 0.5) - 1.0)
+    n_obs = np.array([c[0] for c in inside])
+    depth = np.array([c[1] for c in inside])
+    verdicts = [c[2] for c in inside]
+    lim = np.minimum(sample_limits(rpm_ext, a_ext, n_obs, s), depth_cap)  # (samples, cuts)
+    warnings = []
+    for j, (n, d, v) in enumerate(inside):
+        p_stable = float(np.mean(lim[:, j] > d))
+        if v == "chatter" and p_stable >= confidence:
+            warnings.append(f"chatter observed at {n:.0f} rpm and {d * 1e3:.3g} mm where the lobes say stable with "
+                            f"{100 * p_stable:.0f} % confidence: the model is off there")
+        elif v == "stable" and 1 - p_stable >= confidence:
+            warnings.append(f"a clean cut at {n:.0f} rpm and {d * 1e3:.3g} mm where the lobes say chatter with "
+                            f"{100 * (1 - p_stable):.0f} % confidence: the model is off there")
+    w = set_weights(lim, depth, verdicts, sigma)
+    shift = _weighted_quantile(s, w, 0.5) - 1.0
+    width1 = _weighted_quantile(s, w, hi_q) - _weighted_quantile(s, w, lo_q)
+    # Cuts that even the sample explaining all of them best gets wrong with ≥ P: beyond the band.
+    from scipy.special import ndtr
+
+    best = int(np.argmax(w))
+    sign = np.array([1.0 if v == "chatter" else -1.0 for v in verdicts])
+    p_best = ndtr(sign * (np.log(depth) - np.log(np.where(np.isfinite(lim[best]), lim[best], 1e6))) / sigma)
+    beyond = np.flatnonzero(p_best < 1 - confidence)
+    if beyond.size:
+        where = ", ".join(f"{n_obs[j]:.0f} rpm" for j in beyond[:3])
+        warnings.append(f"no tool point within the holder's band explains the cut(s) at {where}: the holder or its "
+                        "model is off (tap the assembly again), or the chatter is not the tool's")
+    # The weighted samples, resampled to equal weights, give the band as without observations;
+    # the safe depth is capped by the weighted median sample's limit (not the central lobes').
+    rs = resampled(s, w)
+    samples = np.minimum(sample_limits(rpm_ext, a_ext, rpm, rs), depth_cap)
+    median = np.minimum(sample_limits(rpm_ext, a_ext, rpm, [_weighted_quantile(s, w, 0.5)])[0], depth_cap)
+    low = np.minimum(np.quantile(samples, 1 - confidence, axis=0, method="inverted_cdf"), median)
+    high = np.maximum(np.quantile(samples, confidence, axis=0, method="inverted_cdf"), low)
+    text = (f"{sources}; weighed by {len(inside)} observed cut(s)" if sources else
+            f"weighed by {len(inside)} observed cut(s)")
+    band = LobeBand(rpm=rpm, a_safe=low, a_low=low, a_high=high, confidence=confidence,
+                    safe_pockets=safe_pockets(rpm, samples, confidence), sources=text, samples=len(rs))
+    return ObservedBand(prior, band, w, s, len(inside), width0, width1, shift, tuple(warnings))
+
+
+def lobes_with_observations(freq_hz, phi_xx, phi_yy, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float,
+                            milling: str, rpm, cuts=(), method: str = "auto", confidence: float = 0.9, band=None,
+                            depth_cap: float = np.inf, modes=None):
+    """The central lobes on ``rpm`` and the holder's band weighed by the observed ``cuts``.
+
+    As :func:`taptune.machine.band.lobes_with_band` (``band`` = (relative half-width,
+    coverage, sources) of :func:`taptune.machine.band.band_from_prediction`), then
+    :func:`observed_band` with ``cuts`` = (rpm, depth [m], verdict) of the same cut.
+
+    Returns
+    -------
+    (taptune.machine.lobes.Lobes, ObservedBand)
+    """
+    from taptune.machine.band import NO_BAND, check_confidence, extended_grid, scale_samples
+    from taptune.machine.lobes import stability_lobes
+
+    check_confidence(confidence)
+    rel, coverage, sources = band if band is not None else (0.0, 0.9, NO_BAND)
+    scales = scale_samples(rel, coverage)
+    ext, inner = extended_grid(rpm, scales)
+    wide = stability_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
+                           milling=milling, rpm=ext, method=method, depth_cap=depth_cap, modes=modes)
+    return wide.on(inner), observed_band(ext, wide.a_lim, inner, scales, cuts, confidence, depth_cap, sources)

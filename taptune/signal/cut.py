@@ -69,6 +69,9 @@ STABLE_DB = -20.0
 #: Chatter also needs a clear line: this prominence [dB] over the background.
 CHATTER_PROMINENCE_DB = 15.0
 MAINS_HZ = (50.0, 60.0)
+#: A candidate line that falls by more than this [dB] from the first to the last third of the
+#: steady cut is a ring dying out (a stable cut near its limit), not a regenerative chatter.
+DECAY_DB = 6.0
 #: The chatter's next family members within this many dB of its strongest line may be the chatter itself.
 FAMILY_DB = 10.0
 
@@ -397,6 +400,42 @@ def _idle_like(f, excess, tp: float, teeth: int, ex, f_top: float, margin_db: fl
     return bool(np.clip(ex[: min(len(ex), 4)], 0, 30).mean() < np.clip(other, 0.0, 30.0).mean() + margin_db)
 
 
+def _half_comb(f, excess, level, tp: float, f_top: float) -> tuple[bool, bool]:
+    """(the lines sit on the odd multiples of f_tp/2 like a forced series, and clearly so).
+
+    A tooth count or a speed given twice too high puts the sound's odd tooth-passing
+    harmonics on the odd multiples of the given f_tp/2, where a period-doubling chatter
+    sounds too. A forced series is strongest at its fundamental and goes on; a flip
+    chatter is strongest near its mode and its family f_c ± k f_tp fades within a few
+    members. A series: the first three members stand out and the first is the strongest of
+    the four (within 3 dB); clearly so when the fourth (3.5 f_tp) stands out too. Not asked
+    for two teeth or fewer: the odd multiples of f_tp/2 are then the spindle's own
+    (run-out) harmonics.
+    """
+    df = f[1] - f[0]
+    targets = (np.arange(4) + 0.5) * tp
+    if targets[2] >= f_top:
+        return False, False
+    targets = targets[targets < f_top]
+    _, ex = _near_max(f, excess, targets, 1.5 * df)
+    _, lv = _near_max(f, level, targets, 1.5 * df)
+    series = bool(np.all(ex[:3] >= LINE_DB) and lv[0] >= lv.max() - 3.0)
+    return series, series and len(ex) == 4 and bool(ex[3] >= LINE_DB)
+
+
+def _line_trend(cut, sample_rate: float, hz: float, parts: int = 3) -> float:
+    """Level change [dB] of the line at ``hz`` from the first to the last of ``parts`` equal parts of ``cut``."""
+    n = len(cut) // parts
+    if n < 64:
+        return 0.0
+    w = np.hanning(n)
+    ff = np.fft.rfftfreq(n, 1.0 / sample_rate)
+    near = np.abs(ff - hz) <= max(2.5 * sample_rate / n, 1.0)
+    lv = [10 * np.log10(np.max(np.abs(np.fft.rfft(cut[i * n:(i + 1) * n] * w))[near] ** 2) + 1e-30)
+          for i in (0, parts - 1)]
+    return float(lv[1] - lv[0])
+
+
 # --------------------------------------------------------------------------- analysis
 
 
@@ -519,6 +558,15 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
         problem = _comb_problem(f, excess, tp, teeth, ex)
         if problem:
             raise InputError(f"{name}: {problem} {where}")
+        series, clearly = _half_comb(f, excess, level, tp, f_top) if teeth >= 3 else (False, False)
+        if series:
+            likely = (f"{teeth // 2} teeth at {rpm:g} rpm, or " if teeth % 2 == 0 else "") + \
+                f"{teeth} teeth at {rpm / 2:g} rpm"
+            what = (f"the lines sit on every multiple of {tp / 2:.1f} Hz, half the tooth passing of --rpm {rpm:g} "
+                    f"with --teeth {teeth}: likely {likely}")
+            if clearly:
+                raise InputError(f"{name}: {what}; check --rpm and --teeth")
+            warnings.append(f"{name}: {what} (else a period-doubling chatter); check --rpm and --teeth")
         # Without a louder cutting part the tooth-passing lines must stand out clearly from the
         # spindle's others; with one, they must at least not be weaker (run-out can be strong).
         if fam < 2 and _idle_like(f, excess, tp, teeth, ex, f_top, 0.0 if contrast else 6.0):
@@ -577,7 +625,13 @@ def analyse_cut(recording, rpm: float, teeth: int, *, start_s: float | None = No
         order = np.flatnonzero(members)[np.argsort(-pl[members])]
         family = tuple(float(pf[i]) for i in order)
         family_db = tuple(float(pl[i] - pl[j]) for i in order)
-        if level_db >= CHATTER_DB and prominence >= CHATTER_PROMINENCE_DB:
+        # A regenerative chatter holds or grows over the cut; a ring that dies out is a stable cut's.
+        dying = _line_trend(cut, fs, float(pf[strongest])) < -DECAY_DB
+        if dying:
+            warnings.append(f"the line at {pf[strongest]:.0f} Hz dies out over the cut: a stable cut ringing, "
+                            "not chatter")
+            verdict = "unclear" if level_db >= 0.0 else "stable"
+        elif level_db >= CHATTER_DB and prominence >= CHATTER_PROMINENCE_DB:
             verdict = "chatter"
         elif level_db >= STABLE_DB or (len(family) >= 2 and level_db >= STABLE_DB - 10):
             verdict = "unclear"

@@ -110,6 +110,9 @@ def test_with_the_holder_the_lobes_suggest_and_the_cut_is_kept(cuts, library, tm
     assert data["suggestion_basis"] == "lobes" and data["suggested_rpm"]
     assert (tmp_path / "lobes.png").stat().st_size > 10_000
     assert data["analysis"]["lobes"]["chatter_matches_tool_mode"] is True  # 4390 Hz: the tool's mode near 4.3 kHz
+    # The holder's band, weighed by this cut (the only one of its kind so far).
+    lobes = data["analysis"]["lobes"]
+    assert lobes["observed_cuts_used"] <= 1 and lobes["band_width_after_pct"] <= lobes["band_width_before_pct"] + 1e-9
     (obs,) = library.get(HOLDER).observations
     assert obs.verdict == "chatter" and obs.depth_mm == 2 and obs.teeth == 4 and obs.material == "al7075"
     # A chatter far from every tool mode: the holder cannot help; --no-save keeps the history as it is.
