@@ -122,6 +122,7 @@ WRITES = {"out", "json", "plot", "csv", "uff", "report", "screenshot", "dir", "l
 USER_FILES = {
     "tap-test.md": {"tap.wav", "my.toml", "other-tool.toml"},
     "library.md": {"colleague.json", "team.json"},
+    "cut.md": {"cut.m4a"},
     "machine.md": {"dummy.toml", "G_aa.csv", "G_ab.csv", "G_bb.csv", "tool_tip.csv", "X.frf", "Y.frf"},
 }
 # Cheap enough to run for real (a second or less each, no library holder needed).
