@@ -28,6 +28,10 @@ The discretisation:
   previous active part (``p + 1`` of them, more the more mode periods the active part
   spans) and interpolated between them: the map's size is d + 2(p + 1) (d = twice the
   number of modes), independent of the step, so fine steps stay cheap.
+* Everything that does not depend on the depth (propagators, kicks per unit depth) is
+  computed once per batch of speeds and reused by every depth the search tries; a batch
+  holds speeds whose node counts lie within ``GROUP_SPREAD`` of each other (the matrix
+  size of its widest cut, cost ∝ n³, against a fixed overhead per step and batch).
 
 The limit at one speed is the smallest depth whose largest multiplier reaches 1, found
 by bracketing then regula falsi on log|μ| (to ``DEPTH_RTOL``), vectorised over the speeds.
@@ -75,6 +79,8 @@ DENSE_WINDOW = 0.015
 COARSE = 4
 #: Rounds of extra samples beside each local minimum and maximum of the sampled limit.
 REFINE_ROUNDS = 2
+#: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
+GROUP_SPREAD = 1.25
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -143,8 +149,8 @@ def _mode_propagator(wn, z, dt):
 
 
 def _propagate(e, q, v):
-    """Apply a mode propagator to modal rows q, v of shape (b, M, n)."""
-    e00, e01, e10, e11 = (x[..., None] for x in e)
+    """Apply a mode propagator (e00, e01, e10, e11), each (b, M, 1), to modal rows q, v (b, M, n)."""
+    e00, e01, e10, e11 = e
     q2 = e00 * q
     q2 += e01 * v
     v *= e11
@@ -197,53 +203,77 @@ def _resolution(active_s, f_max: float, steps_per_mode: float | None, nodes: int
     return p, np.maximum(2, np.ceil(frac * periods * per_mode)).astype(int)
 
 
-def _monodromy(cols, geom, teeth, ktc, krc, tau, depth, plan: _Plan) -> np.ndarray:
-    """Monodromy matrices of a batch: tooth periods ``tau`` (b,), depths ``depth`` (b,) → (b, n, n).
+@dataclass(frozen=True)
+class _Steps:
+    """The depth-independent part of the monodromy of a batch of speeds (one plan): the
+    propagators between kicks and the kick per unit depth, for every step at once (step
+    axis first, so that each step reads contiguous memory)."""
 
-    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
-    """
+    first: tuple  # propagator to the first step's midpoint, 4 × (b, M, 1)
+    between: tuple  # from step i's midpoint to step i+1's (the last: to the period's end), 4 × (s, b, M, 1)
+    to_edge: tuple  # from step i's midpoint to its end (the history nodes), (e00, e01) × (s, b, M, 1)
+    kq: np.ndarray  # velocity kick per unit depth from the modal displacements, (s, b, M, M) [1/(m s)]
+    kh: np.ndarray  # … from the delayed x and y, (s, b, M, 2)
+    sel_t: np.ndarray  # x and y from the modal displacements, (2, M)
+
+    def take(self, idx) -> "_Steps":
+        return _Steps(tuple(x[idx] for x in self.first), tuple(x[:, idx] for x in self.between),
+                      tuple(x[:, idx] for x in self.to_edge), self.kq[:, idx], self.kh[:, idx], self.sel_t)
+
+
+def _steps(cols, geom, teeth, ktc, krc, tau, plan: _Plan) -> _Steps:
+    """Precompute :class:`_Steps` for tooth periods ``tau`` (b,)."""
     d, wn, z, k = cols
     st, ex, frac = geom
     nm = len(wn)
+    active = frac * tau  # seconds
+    h = np.diff(plan.edges)[None, :] * active[:, None]  # (b, s)
+    tmid = 0.5 * (plan.edges[1:] + plan.edges[:-1])[None, :] * active[:, None]
+    omega = 2 * np.pi / (teeth * tau)  # rad/s of the spindle
+    hm = _cutting_matrix(st + omega[:, None] * tmid, teeth, ktc, krc, st, ex)  # (b, s, 2, 2)
+    sel = np.zeros((nm, 2))
+    sel[np.arange(nm), d] = 1.0
+    gsel = (wn * wn / k)[:, None] * sel  # modal acceleration per newton in x, y
+    kh = np.einsum("mi,bsij->sbmj", gsel, hm) * h.T[..., None, None]
+    free = (1 - frac) * tau
+    gaps = 0.5 * h
+    gaps[:, :-1] += 0.5 * h[:, 1:]
+    gaps[:, -1] += free
+    col = lambda e: tuple(np.ascontiguousarray(np.moveaxis(x, 1, 0)[..., None]) for x in e)  # noqa: E731
+    return _Steps(tuple(x[..., None] for x in _mode_propagator(wn, z, 0.5 * h[:, 0])),
+                  col(_mode_propagator(wn, z, gaps)), col(_mode_propagator(wn, z, 0.5 * h)[:2]),
+                  np.ascontiguousarray(kh @ sel.T), np.ascontiguousarray(kh), sel.T.copy())
+
+
+def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
+    """Monodromy matrices of a batch at depths ``depth`` (b,) → (b, n, n).
+
+    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
+    Each step: exact free motion to its midpoint, the cutting impulse of the step, exact
+    free motion on (to the next midpoint, or through the free flight to the period's end).
+    """
+    _, b, nm, _ = steps.kq.shape
     p1 = len(plan.nodes)
     n = 2 * nm + 2 * p1
-    b = len(tau)
-    active = frac * tau  # seconds
-    # Rows: q and v of each mode in terms of z; start at identity.
     q = np.zeros((b, nm, n))
     v = np.zeros((b, nm, n))
     q[:, np.arange(nm), np.arange(nm)] = 1.0
     v[:, np.arange(nm), nm + np.arange(nm)] = 1.0
-    hist = 2 * nm + 2 * np.arange(p1)  # column of x at node j; y at +1
-    sel = np.zeros((nm, 2))
-    sel[np.arange(nm), d] = 1.0
-    gain = wn * wn / k  # modal acceleration per newton
-    new_hist = np.zeros((b, 2 * p1, n))
-    omega = 2 * np.pi / (teeth * tau)  # rad/s of the spindle
-    h_steps = np.diff(plan.edges)
+    a = np.asarray(depth, dtype=float)[None, :, None, None]
+    kq, kh = steps.kq * a, steps.kh * a
+    new_hist = np.zeros((b, p1, 2, n))
     node_at = {int(s): j for j, s in enumerate(plan.node_step)}
-    new_hist[:, 0:2] = np.einsum("mi,bmn->bin", sel, q)
-    for i, hfrac in enumerate(h_steps):
-        h = hfrac * active  # (b,)
-        half = _mode_propagator(wn, z, 0.5 * h)
-        q, v = _propagate(half, q, v)
-        tmid = (plan.edges[i] + 0.5 * hfrac) * active
-        hm = _cutting_matrix(st + omega * tmid, teeth, ktc, krc, st, ex)  # (b, 2, 2)
-        x = np.einsum("mi,bmn->bin", sel, q)  # (b, 2, n)
-        lag = plan.interp[i]
-        xd = np.zeros((b, 2, n))
-        xd[:, 0, hist] = lag
-        xd[:, 1, hist + 1] = lag
-        force = np.einsum("bij,bjn->bin", hm, x - xd) * (depth * h)[:, None, None]  # impulse per unit z
-        v = v + gain[None, :, None] * np.einsum("mi,bin->bmn", sel, force)
-        q, v = _propagate(half, q, v)
+    new_hist[:, 0] = steps.sel_t @ q
+    q, v = _propagate(steps.first, q, v)
+    for i in range(kq.shape[0]):
+        dv = kq[i] @ q
+        dh = dv[:, :, 2 * nm:].reshape(b, nm, p1, 2)  # a view: the delayed x, y at the nodes
+        dh -= kh[i][:, :, None, :] * plan.interp[i][None, None, :, None]
+        v += dv
         if i + 1 in node_at:
-            j = node_at[i + 1]
-            new_hist[:, 2 * j: 2 * j + 2] = np.einsum("mi,bmn->bin", sel, q)
-    free = (1 - frac) * tau
-    if np.any(free > 0):
-        q, v = _propagate(_mode_propagator(wn, z, free), q, v)
-    return np.concatenate([q, v, new_hist], axis=1)
+            new_hist[:, node_at[i + 1]] = steps.sel_t @ (steps.to_edge[0][i] * q + steps.to_edge[1][i] * v)
+        q, v = _propagate(tuple(x[i] for x in steps.between), q, v)
+    return np.concatenate([q, v, new_hist.reshape(b, 2 * p1, n)], axis=1)
 
 
 def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
@@ -263,7 +293,8 @@ def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter
     tau = 60.0 / (rpm * teeth)
     f_max = cols[1].max() / (2 * np.pi)
     p, between = _resolution(geom[2] * tau, f_max, steps_per_mode, nodes)
-    phi = _monodromy(cols, geom, teeth, ktc, krc, np.full(a.size, tau), a, _plan(p, between))
+    plan = _plan(p, between)
+    phi = _monodromy(_steps(cols, geom, teeth, ktc, krc, np.full(a.size, tau), plan), a, plan)
     return _critical(phi)
 
 
@@ -392,15 +423,23 @@ def _limits(run, tau, start, ok, warm: bool = False):
     flip_s = np.zeros(tau.size, bool)
     chat_s = np.full(tau.size, np.nan)
     idx = np.flatnonzero(ok)
-    p_need = geom[2] * tau * f_max
-    # Batches of similar resolution: sorted by the node count they need.
-    order = idx[np.argsort(p_need[idx], kind="stable")]
-    for chunk in np.array_split(order, max(1, int(np.ceil(order.size / BATCH)))):
-        if chunk.size == 0:
-            continue
+    periods = geom[2] * tau * f_max
+    # Batches of similar node count: a batch runs at the resolution of its widest cut (matrix
+    # cost ∝ n³), while every batch costs a fixed overhead per step; GROUP_SPREAD balances the two.
+    order = idx[np.argsort(periods[idx], kind="stable")]
+    chunks = []
+    while order.size:
+        p_first = MIN_NODES + NODES_PER_PERIOD * periods[order[0]]
+        take = int(np.searchsorted(MIN_NODES + NODES_PER_PERIOD * periods[order], GROUP_SPREAD * p_first, "right"))
+        chunks.append(order[:max(1, min(take, BATCH))])
+        order = order[chunks[-1].size:]
+
+    def one(chunk):
         p, between = _resolution(geom[2] * tau[chunk].max(), f_max, None, None)
-        plan = _plan(p, between)
-        a, fl, ch = _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, plan, warm)
+        return _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, _plan(p, between), warm)
+
+    results = [one(c) for c in chunks]
+    for chunk, (a, fl, ch) in zip(chunks, results):
         a_s[chunk], flip_s[chunk], chat_s[chunk] = a, fl, ch
     return a_s, flip_s, chat_s
 
@@ -418,11 +457,12 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
     trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
+    steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
     for _ in range(60):
         act = np.flatnonzero(~done)
         if act.size == 0:
             break
-        rho, mu = _critical(_monodromy(cols, geom, teeth, ktc, krc, tau[act], trial[act], plan))
+        rho, mu = _critical(_monodromy(steps.take(act), trial[act], plan))
         g = np.log(rho)
         unstable = g >= 0
         for sel, is_unst in ((act[unstable], True), (act[~unstable], False)):
@@ -458,6 +498,11 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             x = x0 - wl * (x1 - x0) / (wh - wl) if wh != wl else 0.5 * (x0 + x1)
             span = x1 - x0
             x = float(np.clip(x, x0 + 0.02 * span, x1 - 0.02 * span))
+            # The root predicted next to the last trial: step just across it to close the bracket.
+            xt = np.log(trial[j])
+            tol = np.log1p(DEPTH_RTOL)
+            if abs(x - xt) < 0.3 * tol and span > tol:
+                x = float(np.clip(xt + np.sign(x - xt) * 0.8 * tol, x0 + 0.02 * span, x1 - 0.02 * span))
             nxt[j] = np.exp(x)
             side[j] = 1 if trial[j] == hi[j] else -1
         trial = nxt
