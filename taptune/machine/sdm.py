@@ -34,7 +34,12 @@ The discretisation:
   size of its widest cut, cost ∝ n³, against a fixed overhead per step and batch).
 
 The limit at one speed is the smallest depth whose largest multiplier reaches 1, found
-by bracketing then regula falsi on log|μ| (to ``DEPTH_RTOL``), vectorised over the speeds.
+by bracketing then regula falsi on log|μ| (bracket ``DEPTH_RTOL``, the root interpolated
+inside it), vectorised over the speeds. Where lobes overlap, depth can be unstable in an
+island below a stable band: a limit far above the zero-order guide is checked at the
+guide's depth and searched again from below when that depth chatters. Large jobs are
+split into speed ranges of equal work run in forked processes (``workers``, from the
+main thread only).
 SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
 fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in relative speed
 (flip lobes are narrow), and interpolated onto
@@ -45,7 +50,7 @@ window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
 Signatures::
 
     sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
-              depth_cap=inf, guide=None) -> SdmLobes
+              depth_cap=inf, guide=None, workers=2) -> SdmLobes
     sdm_growth(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
                steps_per_mode=None, nodes=None) -> (|μ|max, μ)     # one speed, many depths
 """
@@ -66,8 +71,9 @@ MIN_NODES = 8
 NODES_PER_PERIOD = 4.0
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
 MAX_NODES = 32
-#: Relative tolerance of the limiting depth.
-DEPTH_RTOL = 5e-3
+#: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
+#: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
+DEPTH_RTOL = 1e-2
 #: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
 SAMPLES_PER_LOBE = 16
 REL_SPACING_MIN = 0.0035
@@ -81,6 +87,12 @@ COARSE = 4
 REFINE_ROUNDS = 2
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
+#: Work (relative units of :func:`_cost`) above which the speeds are shared between processes.
+PARALLEL_WORK = 2e5
+#: Limits above this multiple of the guide (zero-order or neighbours' limit) are checked for an island below.
+ISLAND_RATIO = 1.3
+#: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
+ISLAND_LEVELS = (0.55, 0.75, 1.0)
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -317,7 +329,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tu
 
 
 def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
-              rpm, depth_cap: float = np.inf, guide=None) -> SdmLobes:
+              rpm, depth_cap: float = np.inf, guide=None, workers: int = 2) -> SdmLobes:
     """Semi-discretization lobes on the speed grid ``rpm`` (module docstring).
 
     Parameters
@@ -334,6 +346,9 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     guide : callable, optional
         rpm array → a first guess of the limit [m] (e.g. the zero-order lobes); speeds
         the search starts from it, else from the static limit of the softest mode.
+    workers : int
+        Processes to share the speeds between (forked; 1: this process only). Used only
+        when the work is large enough to pay for the start.
 
     Returns
     -------
@@ -344,6 +359,47 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         raise InputError("the spindle speeds must be finite and > 0 rpm")
     if not (ktc > 0 and krc >= 0):
         raise InputError("K_tc must be > 0 and K_rc >= 0")
+    cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
+    if not _worth_processes(modes_x, modes_y, speeds, cut, workers):
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, **cut)
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, **cut)
+
+
+def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
+    """Relative work per sampled speed: steps × rows × matrix size (0 where the ZOA takes over)."""
+    cols = _modal(modes_x, modes_y)
+    geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
+    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * cols[1].max() / (2 * np.pi)
+    p = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
+    n = 2 * len(cols[1]) + 2 * (p + 1)
+    steps = np.maximum(2 * p, STEPS_PER_MODE * periods)
+    return np.where(p <= MAX_NODES, steps * n + n ** 3 / 20, 0.0)
+
+
+def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
+    """Whether the batches of speeds go to ``workers`` forked processes: only from the main
+    thread (a fork from a thread of the app could copy a lock another thread holds) and only
+    when the work pays for their start (~0.1 s)."""
+    import multiprocessing
+    import threading
+
+    lo, hi = float(speeds.min()), float(speeds.max())
+    if workers < 2 or hi / lo < 1.2 or "fork" not in multiprocessing.get_all_start_methods():
+        return False
+    if threading.current_thread() is not threading.main_thread():
+        return False
+    samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
+    return float(np.sum(_cost(modes_x, modes_y, samples, cut))) >= PARALLEL_WORK
+
+
+def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool) -> SdmLobes:
+    """:func:`sdm_lobes` (``rpm`` checked); the batches of each phase go to ``pool`` if given
+    (every speed's search is independent of its batch, so the result is the same)."""
+    speeds = np.asarray(rpm, dtype=float)
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
@@ -374,7 +430,7 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     k_min = np.min(cols[3])
     fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
     start = np.where(np.isfinite(start) & (start > 0), start, fallback)
-    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap)
+    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap, pool)
     # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
     # tight first bracket: about half the evaluations).
     coarse = np.zeros(samples.size, bool)
@@ -390,6 +446,9 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         warm = known.sum() >= 2
         guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
         a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
+    island = guide is not None
+    if island:
+        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok)
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
     for _ in range(REFINE_ROUNDS):
@@ -406,6 +465,12 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
         guess = np.where(np.isfinite(guess), guess, start[0])
         a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool), warm=True)
+        if island:
+            fin_s = np.where(np.isfinite(a_s), a_s, np.inf)
+            at = np.searchsorted(samples, new)
+            near = np.minimum(fin_s[np.clip(at - 1, 0, None)], fin_s[np.clip(at, None, samples.size - 1)])
+            _islands(run, tau_n, a_n, f_n, c_n, np.minimum(np.asarray(guide(new), dtype=float), near),
+                     np.ones(new.size, bool))
         samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
         cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
@@ -418,30 +483,85 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
 def _limits(run, tau, start, ok, warm: bool = False):
     """Limit, flip flag and chatter frequency at each tooth period ``tau`` where ``ok``
     (``warm``: ``start`` is a close guess, :func:`_search`)."""
-    cols, geom, teeth, ktc, krc, f_max, depth_cap = run
+    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
     a_s = np.full(tau.size, np.inf)
     flip_s = np.zeros(tau.size, bool)
     chat_s = np.full(tau.size, np.nan)
-    idx = np.flatnonzero(ok)
-    periods = geom[2] * tau * f_max
-    # Batches of similar node count: a batch runs at the resolution of its widest cut (matrix
-    # cost ∝ n³), while every batch costs a fixed overhead per step; GROUP_SPREAD balances the two.
-    order = idx[np.argsort(periods[idx], kind="stable")]
-    chunks = []
-    while order.size:
-        p_first = MIN_NODES + NODES_PER_PERIOD * periods[order[0]]
-        take = int(np.searchsorted(MIN_NODES + NODES_PER_PERIOD * periods[order], GROUP_SPREAD * p_first, "right"))
-        chunks.append(order[:max(1, min(take, BATCH))])
-        order = order[chunks[-1].size:]
-
-    def one(chunk):
-        p, between = _resolution(geom[2] * tau[chunk].max(), f_max, None, None)
-        return _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, _plan(p, between), warm)
-
-    results = [one(c) for c in chunks]
-    for chunk, (a, fl, ch) in zip(chunks, results):
-        a_s[chunk], flip_s[chunk], chat_s[chunk] = a, fl, ch
+    batches = _batches(run, tau, np.flatnonzero(ok))
+    jobs = [(cols, geom, teeth, ktc, krc, tau[c], start[c], depth_cap, plan, warm) for c, plan in batches]
+    for (chunk, _), out in zip(batches, _run_jobs(pool, _search, jobs, batches)):
+        a_s[chunk], flip_s[chunk], chat_s[chunk] = out
     return a_s, flip_s, chat_s
+
+
+def _star(job):
+    fn, args = job
+    return fn(*args)
+
+
+def _run_jobs(pool, fn, jobs, batches) -> list:
+    """``fn(*job)`` for each job, in ``pool`` when given (largest batches first)."""
+    if pool is None or len(jobs) < 2:
+        return [fn(*j) for j in jobs]
+    size = [c.size * len(plan.edges) * len(plan.nodes) ** 2 for c, plan in batches]
+    order = np.argsort(size)[::-1]
+    done = dict(zip(order, pool.map(_star, [(fn, jobs[i]) for i in order])))
+    return [done[i] for i in range(len(jobs))]
+
+
+def _neighbour_min(a) -> np.ndarray:
+    """The lower of each sample's two neighbours' limits (inf beyond the ends)."""
+    pad = np.concatenate([[np.inf], np.where(np.isfinite(a), a, np.inf), [np.inf]])
+    return np.minimum(pad[:-2], pad[2:])
+
+
+def _islands(run, tau, a_s, flip_s, chat_s, guide_a, ok) -> None:
+    """Where lobes overlap, depth can chatter in an island below a stable band, and a search
+    started from a neighbour's limit brackets only the crossing nearest to it. Limits above
+    ISLAND_RATIO × the guide (the lower of the zero-order limit and the neighbouring samples'
+    limits) are checked at ISLAND_LEVELS × the guide;
+    where one chatters, the limit is searched again downward from the lowest (in place)."""
+    g = np.where(np.isfinite(guide_a) & (guide_a > 0), guide_a, np.nan)
+    check = np.flatnonzero(ok & np.isfinite(a_s) & np.isfinite(g) & (a_s > ISLAND_RATIO * g))
+    if check.size == 0:
+        return
+    levels = np.asarray(ISLAND_LEVELS)
+    rho = _growth(run, np.repeat(tau[check], levels.size), (g[check][:, None] * levels).ravel())
+    unstable = rho.reshape(check.size, levels.size) >= 1.0
+    redo = unstable.any(axis=1)
+    if redo.any():
+        idx = check[redo]
+        lowest = levels[np.argmax(unstable[redo], axis=1)] * g[idx]
+        a_s[idx], flip_s[idx], chat_s[idx] = _limits(run, tau[idx], lowest, np.ones(idx.size, bool), warm=True)
+
+
+def _batches(run, tau, idx):
+    """Batches of similar node count (GROUP_SPREAD) among the speeds ``idx``: [(indices, plan)]."""
+    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    periods = geom[2] * tau * f_max
+    order = idx[np.argsort(periods[idx], kind="stable")]
+    out = []
+    while order.size:
+        nodes = MIN_NODES + NODES_PER_PERIOD * periods[order]
+        take = max(1, min(int(np.searchsorted(nodes, GROUP_SPREAD * nodes[0], "right")), BATCH))
+        chunk, order = order[:take], order[take:]
+        out.append((chunk, _plan(*_resolution(geom[2] * tau[chunk].max(), f_max, None, None))))
+    return out
+
+
+def _growth(run, tau, depth) -> np.ndarray:
+    """Largest |μ| at tooth periods ``tau`` and depths ``depth`` (one each)."""
+    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    rho = np.empty(tau.size)
+    batches = _batches(run, tau, np.arange(tau.size))
+    jobs = [(cols, geom, teeth, ktc, krc, tau[c], depth[c], plan) for c, plan in batches]
+    for (chunk, _), out in zip(batches, _run_jobs(pool, _growth_batch, jobs, batches)):
+        rho[chunk] = out
+    return rho
+
+
+def _growth_batch(cols, geom, teeth, ktc, krc, tau, depth, plan) -> np.ndarray:
+    return _critical(_monodromy(_steps(cols, geom, teeth, ktc, krc, tau, plan), depth, plan))[0]
 
 
 def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
@@ -506,7 +626,13 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             nxt[j] = np.exp(x)
             side[j] = 1 if trial[j] == hi[j] else -1
         trial = nxt
-    out = np.where(np.isfinite(hi), np.sqrt(np.maximum(lo, 1e-300) * hi), np.inf)
+    # Inside the final bracket: the root of log|μ| interpolated linearly in log a (the bracket's
+    # geometric mean where a side's value is missing).
+    with np.errstate(all="ignore"):
+        xl, xh = np.log(np.maximum(lo, 1e-300)), np.log(hi)
+        x = xl - glo * (xh - xl) / (ghi - glo)
+        x = np.where(np.isfinite(x) & (x >= xl) & (x <= xh), x, 0.5 * (xl + xh))
+        out = np.where(np.isfinite(hi), np.exp(x), np.inf)
     out = np.where(np.isfinite(hi) & (lo == 0), hi, out)
     flip = np.isfinite(hi) & (mu_hi.real < 0) & (np.abs(mu_hi.imag) <= 1e-3 * np.abs(mu_hi))
     # Chatter frequency: the multiplier's angle θ gives f = (θ/2π + k)/T; the k nearest a mode is kept.
