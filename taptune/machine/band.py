@@ -95,14 +95,14 @@ def scale_samples(rel_half_width: float, coverage: float = 0.9, n: int = SAMPLES
 
     ``rel_half_width`` 0 gives the single factor 1 (no band).
     """
-    from scipy.stats import norm
-
     if not (rel_half_width >= 0 and np.isfinite(rel_half_width)):
         raise InputError(f"the relative band must be >= 0, got {rel_half_width!r}")
     if rel_half_width == 0:
         return np.ones(1)
-    sigma = rel_half_width / norm.ppf(0.5 + coverage / 2)
-    return 1.0 + sigma * norm.ppf((np.arange(n) + 0.5) / n)
+    from scipy.special import ndtri  # the normal quantile (scipy.stats costs ~1 s to import)
+
+    sigma = rel_half_width / ndtri(0.5 + coverage / 2)
+    return 1.0 + sigma * ndtri((np.arange(n) + 0.5) / n)
 
 
 def extended_grid(rpm, scales) -> tuple[np.ndarray, slice]:

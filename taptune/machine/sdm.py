@@ -28,9 +28,18 @@ The discretisation:
   previous active part (``p + 1`` of them, more the more mode periods the active part
   spans) and interpolated between them: the map's size is d + 2(p + 1) (d = twice the
   number of modes), independent of the step, so fine steps stay cheap.
+* Everything that does not depend on the depth (propagators, kicks per unit depth) is
+  computed once per batch of speeds and reused by every depth the search tries; a batch
+  holds speeds whose node counts lie within ``GROUP_SPREAD`` of each other (the matrix
+  size of its widest cut, cost ∝ n³, against a fixed overhead per step and batch).
 
 The limit at one speed is the smallest depth whose largest multiplier reaches 1, found
-by bracketing then regula falsi on log|μ| (to ``DEPTH_RTOL``), vectorised over the speeds.
+by bracketing then regula falsi on log|μ| (bracket ``DEPTH_RTOL``, the root interpolated
+inside it), vectorised over the speeds. Where lobes overlap, depth can be unstable in an
+island below a stable band: a limit far above the zero-order guide is checked at the
+guide's depth and searched again from below when that depth chatters. Large jobs are
+split into speed ranges of equal work run in forked processes (``workers``, from the
+main thread only).
 SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
 fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in relative speed
 (flip lobes are narrow), and interpolated onto
@@ -41,7 +50,7 @@ window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
 Signatures::
 
     sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
-              depth_cap=inf, guide=None) -> SdmLobes
+              depth_cap=inf, guide=None, workers=2) -> SdmLobes
     sdm_growth(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
                steps_per_mode=None, nodes=None) -> (|μ|max, μ)     # one speed, many depths
 """
@@ -62,8 +71,9 @@ MIN_NODES = 8
 NODES_PER_PERIOD = 4.0
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
 MAX_NODES = 32
-#: Relative tolerance of the limiting depth.
-DEPTH_RTOL = 5e-3
+#: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
+#: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
+DEPTH_RTOL = 1e-2
 #: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
 SAMPLES_PER_LOBE = 16
 REL_SPACING_MIN = 0.0035
@@ -75,6 +85,14 @@ DENSE_WINDOW = 0.015
 COARSE = 4
 #: Rounds of extra samples beside each local minimum and maximum of the sampled limit.
 REFINE_ROUNDS = 2
+#: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
+GROUP_SPREAD = 1.25
+#: Work (relative units of :func:`_cost`) above which the speeds are shared between processes.
+PARALLEL_WORK = 2e5
+#: Limits above this multiple of the guide (zero-order or neighbours' limit) are checked for an island below.
+ISLAND_RATIO = 1.3
+#: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
+ISLAND_LEVELS = (0.55, 0.75, 1.0)
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -143,8 +161,8 @@ def _mode_propagator(wn, z, dt):
 
 
 def _propagate(e, q, v):
-    """Apply a mode propagator to modal rows q, v of shape (b, M, n)."""
-    e00, e01, e10, e11 = (x[..., None] for x in e)
+    """Apply a mode propagator (e00, e01, e10, e11), each (b, M, 1), to modal rows q, v (b, M, n)."""
+    e00, e01, e10, e11 = e
     q2 = e00 * q
     q2 += e01 * v
     v *= e11
@@ -197,53 +215,77 @@ def _resolution(active_s, f_max: float, steps_per_mode: float | None, nodes: int
     return p, np.maximum(2, np.ceil(frac * periods * per_mode)).astype(int)
 
 
-def _monodromy(cols, geom, teeth, ktc, krc, tau, depth, plan: _Plan) -> np.ndarray:
-    """Monodromy matrices of a batch: tooth periods ``tau`` (b,), depths ``depth`` (b,) → (b, n, n).
+@dataclass(frozen=True)
+class _Steps:
+    """The depth-independent part of the monodromy of a batch of speeds (one plan): the
+    propagators between kicks and the kick per unit depth, for every step at once (step
+    axis first, so that each step reads contiguous memory)."""
 
-    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
-    """
+    first: tuple  # propagator to the first step's midpoint, 4 × (b, M, 1)
+    between: tuple  # from step i's midpoint to step i+1's (the last: to the period's end), 4 × (s, b, M, 1)
+    to_edge: tuple  # from step i's midpoint to its end (the history nodes), (e00, e01) × (s, b, M, 1)
+    kq: np.ndarray  # velocity kick per unit depth from the modal displacements, (s, b, M, M) [1/(m s)]
+    kh: np.ndarray  # … from the delayed x and y, (s, b, M, 2)
+    sel_t: np.ndarray  # x and y from the modal displacements, (2, M)
+
+    def take(self, idx) -> "_Steps":
+        return _Steps(tuple(x[idx] for x in self.first), tuple(x[:, idx] for x in self.between),
+                      tuple(x[:, idx] for x in self.to_edge), self.kq[:, idx], self.kh[:, idx], self.sel_t)
+
+
+def _steps(cols, geom, teeth, ktc, krc, tau, plan: _Plan) -> _Steps:
+    """Precompute :class:`_Steps` for tooth periods ``tau`` (b,)."""
     d, wn, z, k = cols
     st, ex, frac = geom
     nm = len(wn)
+    active = frac * tau  # seconds
+    h = np.diff(plan.edges)[None, :] * active[:, None]  # (b, s)
+    tmid = 0.5 * (plan.edges[1:] + plan.edges[:-1])[None, :] * active[:, None]
+    omega = 2 * np.pi / (teeth * tau)  # rad/s of the spindle
+    hm = _cutting_matrix(st + omega[:, None] * tmid, teeth, ktc, krc, st, ex)  # (b, s, 2, 2)
+    sel = np.zeros((nm, 2))
+    sel[np.arange(nm), d] = 1.0
+    gsel = (wn * wn / k)[:, None] * sel  # modal acceleration per newton in x, y
+    kh = np.einsum("mi,bsij->sbmj", gsel, hm) * h.T[..., None, None]
+    free = (1 - frac) * tau
+    gaps = 0.5 * h
+    gaps[:, :-1] += 0.5 * h[:, 1:]
+    gaps[:, -1] += free
+    col = lambda e: tuple(np.ascontiguousarray(np.moveaxis(x, 1, 0)[..., None]) for x in e)  # noqa: E731
+    return _Steps(tuple(x[..., None] for x in _mode_propagator(wn, z, 0.5 * h[:, 0])),
+                  col(_mode_propagator(wn, z, gaps)), col(_mode_propagator(wn, z, 0.5 * h)[:2]),
+                  np.ascontiguousarray(kh @ sel.T), np.ascontiguousarray(kh), sel.T.copy())
+
+
+def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
+    """Monodromy matrices of a batch at depths ``depth`` (b,) → (b, n, n).
+
+    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
+    Each step: exact free motion to its midpoint, the cutting impulse of the step, exact
+    free motion on (to the next midpoint, or through the free flight to the period's end).
+    """
+    _, b, nm, _ = steps.kq.shape
     p1 = len(plan.nodes)
     n = 2 * nm + 2 * p1
-    b = len(tau)
-    active = frac * tau  # seconds
-    # Rows: q and v of each mode in terms of z; start at identity.
     q = np.zeros((b, nm, n))
     v = np.zeros((b, nm, n))
     q[:, np.arange(nm), np.arange(nm)] = 1.0
     v[:, np.arange(nm), nm + np.arange(nm)] = 1.0
-    hist = 2 * nm + 2 * np.arange(p1)  # column of x at node j; y at +1
-    sel = np.zeros((nm, 2))
-    sel[np.arange(nm), d] = 1.0
-    gain = wn * wn / k  # modal acceleration per newton
-    new_hist = np.zeros((b, 2 * p1, n))
-    omega = 2 * np.pi / (teeth * tau)  # rad/s of the spindle
-    h_steps = np.diff(plan.edges)
+    a = np.asarray(depth, dtype=float)[None, :, None, None]
+    kq, kh = steps.kq * a, steps.kh * a
+    new_hist = np.zeros((b, p1, 2, n))
     node_at = {int(s): j for j, s in enumerate(plan.node_step)}
-    new_hist[:, 0:2] = np.einsum("mi,bmn->bin", sel, q)
-    for i, hfrac in enumerate(h_steps):
-        h = hfrac * active  # (b,)
-        half = _mode_propagator(wn, z, 0.5 * h)
-        q, v = _propagate(half, q, v)
-        tmid = (plan.edges[i] + 0.5 * hfrac) * active
-        hm = _cutting_matrix(st + omega * tmid, teeth, ktc, krc, st, ex)  # (b, 2, 2)
-        x = np.einsum("mi,bmn->bin", sel, q)  # (b, 2, n)
-        lag = plan.interp[i]
-        xd = np.zeros((b, 2, n))
-        xd[:, 0, hist] = lag
-        xd[:, 1, hist + 1] = lag
-        force = np.einsum("bij,bjn->bin", hm, x - xd) * (depth * h)[:, None, None]  # impulse per unit z
-        v = v + gain[None, :, None] * np.einsum("mi,bin->bmn", sel, force)
-        q, v = _propagate(half, q, v)
+    new_hist[:, 0] = steps.sel_t @ q
+    q, v = _propagate(steps.first, q, v)
+    for i in range(kq.shape[0]):
+        dv = kq[i] @ q
+        dh = dv[:, :, 2 * nm:].reshape(b, nm, p1, 2)  # a view: the delayed x, y at the nodes
+        dh -= kh[i][:, :, None, :] * plan.interp[i][None, None, :, None]
+        v += dv
         if i + 1 in node_at:
-            j = node_at[i + 1]
-            new_hist[:, 2 * j: 2 * j + 2] = np.einsum("mi,bmn->bin", sel, q)
-    free = (1 - frac) * tau
-    if np.any(free > 0):
-        q, v = _propagate(_mode_propagator(wn, z, free), q, v)
-    return np.concatenate([q, v, new_hist], axis=1)
+            new_hist[:, node_at[i + 1]] = steps.sel_t @ (steps.to_edge[0][i] * q + steps.to_edge[1][i] * v)
+        q, v = _propagate(tuple(x[i] for x in steps.between), q, v)
+    return np.concatenate([q, v, new_hist.reshape(b, 2 * p1, n)], axis=1)
 
 
 def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
@@ -263,7 +305,8 @@ def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter
     tau = 60.0 / (rpm * teeth)
     f_max = cols[1].max() / (2 * np.pi)
     p, between = _resolution(geom[2] * tau, f_max, steps_per_mode, nodes)
-    phi = _monodromy(cols, geom, teeth, ktc, krc, np.full(a.size, tau), a, _plan(p, between))
+    plan = _plan(p, between)
+    phi = _monodromy(_steps(cols, geom, teeth, ktc, krc, np.full(a.size, tau), plan), a, plan)
     return _critical(phi)
 
 
@@ -286,7 +329,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tu
 
 
 def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
-              rpm, depth_cap: float = np.inf, guide=None) -> SdmLobes:
+              rpm, depth_cap: float = np.inf, guide=None, workers: int = 2) -> SdmLobes:
     """Semi-discretization lobes on the speed grid ``rpm`` (module docstring).
 
     Parameters
@@ -303,6 +346,9 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     guide : callable, optional
         rpm array → a first guess of the limit [m] (e.g. the zero-order lobes); speeds
         the search starts from it, else from the static limit of the softest mode.
+    workers : int
+        Processes to share the speeds between (forked; 1: this process only). Used only
+        when the work is large enough to pay for the start.
 
     Returns
     -------
@@ -313,6 +359,47 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         raise InputError("the spindle speeds must be finite and > 0 rpm")
     if not (ktc > 0 and krc >= 0):
         raise InputError("K_tc must be > 0 and K_rc >= 0")
+    cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
+    if not _worth_processes(modes_x, modes_y, speeds, cut, workers):
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, **cut)
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, **cut)
+
+
+def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
+    """Relative work per sampled speed: steps × rows × matrix size (0 where the ZOA takes over)."""
+    cols = _modal(modes_x, modes_y)
+    geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
+    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * cols[1].max() / (2 * np.pi)
+    p = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
+    n = 2 * len(cols[1]) + 2 * (p + 1)
+    steps = np.maximum(2 * p, STEPS_PER_MODE * periods)
+    return np.where(p <= MAX_NODES, steps * n + n ** 3 / 20, 0.0)
+
+
+def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
+    """Whether the batches of speeds go to ``workers`` forked processes: only from the main
+    thread (a fork from a thread of the app could copy a lock another thread holds) and only
+    when the work pays for their start (~0.1 s)."""
+    import multiprocessing
+    import threading
+
+    lo, hi = float(speeds.min()), float(speeds.max())
+    if workers < 2 or hi / lo < 1.2 or "fork" not in multiprocessing.get_all_start_methods():
+        return False
+    if threading.current_thread() is not threading.main_thread():
+        return False
+    samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
+    return float(np.sum(_cost(modes_x, modes_y, samples, cut))) >= PARALLEL_WORK
+
+
+def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool) -> SdmLobes:
+    """:func:`sdm_lobes` (``rpm`` checked); the batches of each phase go to ``pool`` if given
+    (every speed's search is independent of its batch, so the result is the same)."""
+    speeds = np.asarray(rpm, dtype=float)
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
@@ -343,7 +430,7 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     k_min = np.min(cols[3])
     fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
     start = np.where(np.isfinite(start) & (start > 0), start, fallback)
-    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap)
+    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap, pool)
     # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
     # tight first bracket: about half the evaluations).
     coarse = np.zeros(samples.size, bool)
@@ -359,6 +446,9 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         warm = known.sum() >= 2
         guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
         a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
+    island = guide is not None
+    if island:
+        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok)
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
     for _ in range(REFINE_ROUNDS):
@@ -375,6 +465,12 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
         guess = np.where(np.isfinite(guess), guess, start[0])
         a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool), warm=True)
+        if island:
+            fin_s = np.where(np.isfinite(a_s), a_s, np.inf)
+            at = np.searchsorted(samples, new)
+            near = np.minimum(fin_s[np.clip(at - 1, 0, None)], fin_s[np.clip(at, None, samples.size - 1)])
+            _islands(run, tau_n, a_n, f_n, c_n, np.minimum(np.asarray(guide(new), dtype=float), near),
+                     np.ones(new.size, bool))
         samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
         cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
@@ -387,22 +483,85 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
 def _limits(run, tau, start, ok, warm: bool = False):
     """Limit, flip flag and chatter frequency at each tooth period ``tau`` where ``ok``
     (``warm``: ``start`` is a close guess, :func:`_search`)."""
-    cols, geom, teeth, ktc, krc, f_max, depth_cap = run
+    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
     a_s = np.full(tau.size, np.inf)
     flip_s = np.zeros(tau.size, bool)
     chat_s = np.full(tau.size, np.nan)
-    idx = np.flatnonzero(ok)
-    p_need = geom[2] * tau * f_max
-    # Batches of similar resolution: sorted by the node count they need.
-    order = idx[np.argsort(p_need[idx], kind="stable")]
-    for chunk in np.array_split(order, max(1, int(np.ceil(order.size / BATCH)))):
-        if chunk.size == 0:
-            continue
-        p, between = _resolution(geom[2] * tau[chunk].max(), f_max, None, None)
-        plan = _plan(p, between)
-        a, fl, ch = _search(cols, geom, teeth, ktc, krc, tau[chunk], start[chunk], depth_cap, plan, warm)
-        a_s[chunk], flip_s[chunk], chat_s[chunk] = a, fl, ch
+    batches = _batches(run, tau, np.flatnonzero(ok))
+    jobs = [(cols, geom, teeth, ktc, krc, tau[c], start[c], depth_cap, plan, warm) for c, plan in batches]
+    for (chunk, _), out in zip(batches, _run_jobs(pool, _search, jobs, batches)):
+        a_s[chunk], flip_s[chunk], chat_s[chunk] = out
     return a_s, flip_s, chat_s
+
+
+def _star(job):
+    fn, args = job
+    return fn(*args)
+
+
+def _run_jobs(pool, fn, jobs, batches) -> list:
+    """``fn(*job)`` for each job, in ``pool`` when given (largest batches first)."""
+    if pool is None or len(jobs) < 2:
+        return [fn(*j) for j in jobs]
+    size = [c.size * len(plan.edges) * len(plan.nodes) ** 2 for c, plan in batches]
+    order = np.argsort(size)[::-1]
+    done = dict(zip(order, pool.map(_star, [(fn, jobs[i]) for i in order])))
+    return [done[i] for i in range(len(jobs))]
+
+
+def _neighbour_min(a) -> np.ndarray:
+    """The lower of each sample's two neighbours' limits (inf beyond the ends)."""
+    pad = np.concatenate([[np.inf], np.where(np.isfinite(a), a, np.inf), [np.inf]])
+    return np.minimum(pad[:-2], pad[2:])
+
+
+def _islands(run, tau, a_s, flip_s, chat_s, guide_a, ok) -> None:
+    """Where lobes overlap, depth can chatter in an island below a stable band, and a search
+    started from a neighbour's limit brackets only the crossing nearest to it. Limits above
+    ISLAND_RATIO × the guide (the lower of the zero-order limit and the neighbouring samples'
+    limits) are checked at ISLAND_LEVELS × the guide;
+    where one chatters, the limit is searched again downward from the lowest (in place)."""
+    g = np.where(np.isfinite(guide_a) & (guide_a > 0), guide_a, np.nan)
+    check = np.flatnonzero(ok & np.isfinite(a_s) & np.isfinite(g) & (a_s > ISLAND_RATIO * g))
+    if check.size == 0:
+        return
+    levels = np.asarray(ISLAND_LEVELS)
+    rho = _growth(run, np.repeat(tau[check], levels.size), (g[check][:, None] * levels).ravel())
+    unstable = rho.reshape(check.size, levels.size) >= 1.0
+    redo = unstable.any(axis=1)
+    if redo.any():
+        idx = check[redo]
+        lowest = levels[np.argmax(unstable[redo], axis=1)] * g[idx]
+        a_s[idx], flip_s[idx], chat_s[idx] = _limits(run, tau[idx], lowest, np.ones(idx.size, bool), warm=True)
+
+
+def _batches(run, tau, idx):
+    """Batches of similar node count (GROUP_SPREAD) among the speeds ``idx``: [(indices, plan)]."""
+    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    periods = geom[2] * tau * f_max
+    order = idx[np.argsort(periods[idx], kind="stable")]
+    out = []
+    while order.size:
+        nodes = MIN_NODES + NODES_PER_PERIOD * periods[order]
+        take = max(1, min(int(np.searchsorted(nodes, GROUP_SPREAD * nodes[0], "right")), BATCH))
+        chunk, order = order[:take], order[take:]
+        out.append((chunk, _plan(*_resolution(geom[2] * tau[chunk].max(), f_max, None, None))))
+    return out
+
+
+def _growth(run, tau, depth) -> np.ndarray:
+    """Largest |μ| at tooth periods ``tau`` and depths ``depth`` (one each)."""
+    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    rho = np.empty(tau.size)
+    batches = _batches(run, tau, np.arange(tau.size))
+    jobs = [(cols, geom, teeth, ktc, krc, tau[c], depth[c], plan) for c, plan in batches]
+    for (chunk, _), out in zip(batches, _run_jobs(pool, _growth_batch, jobs, batches)):
+        rho[chunk] = out
+    return rho
+
+
+def _growth_batch(cols, geom, teeth, ktc, krc, tau, depth, plan) -> np.ndarray:
+    return _critical(_monodromy(_steps(cols, geom, teeth, ktc, krc, tau, plan), depth, plan))[0]
 
 
 def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
@@ -418,11 +577,12 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
     trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
+    steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
     for _ in range(60):
         act = np.flatnonzero(~done)
         if act.size == 0:
             break
-        rho, mu = _critical(_monodromy(cols, geom, teeth, ktc, krc, tau[act], trial[act], plan))
+        rho, mu = _critical(_monodromy(steps.take(act), trial[act], plan))
         g = np.log(rho)
         unstable = g >= 0
         for sel, is_unst in ((act[unstable], True), (act[~unstable], False)):
@@ -458,10 +618,21 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             x = x0 - wl * (x1 - x0) / (wh - wl) if wh != wl else 0.5 * (x0 + x1)
             span = x1 - x0
             x = float(np.clip(x, x0 + 0.02 * span, x1 - 0.02 * span))
+            # The root predicted next to the last trial: step just across it to close the bracket.
+            xt = np.log(trial[j])
+            tol = np.log1p(DEPTH_RTOL)
+            if abs(x - xt) < 0.3 * tol and span > tol:
+                x = float(np.clip(xt + np.sign(x - xt) * 0.8 * tol, x0 + 0.02 * span, x1 - 0.02 * span))
             nxt[j] = np.exp(x)
             side[j] = 1 if trial[j] == hi[j] else -1
         trial = nxt
-    out = np.where(np.isfinite(hi), np.sqrt(np.maximum(lo, 1e-300) * hi), np.inf)
+    # Inside the final bracket: the root of log|μ| interpolated linearly in log a (the bracket's
+    # geometric mean where a side's value is missing).
+    with np.errstate(all="ignore"):
+        xl, xh = np.log(np.maximum(lo, 1e-300)), np.log(hi)
+        x = xl - glo * (xh - xl) / (ghi - glo)
+        x = np.where(np.isfinite(x) & (x >= xl) & (x <= xh), x, 0.5 * (xl + xh))
+        out = np.where(np.isfinite(hi), np.exp(x), np.inf)
     out = np.where(np.isfinite(hi) & (lo == 0), hi, out)
     flip = np.isfinite(hi) & (mu_hi.real < 0) & (np.abs(mu_hi.imag) <= 1e-3 * np.abs(mu_hi))
     # Chatter frequency: the multiplier's angle θ gives f = (θ/2π + k)/T; the k nearest a mode is kept.
