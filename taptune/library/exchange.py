@@ -31,6 +31,8 @@ import numpy as np
 
 from taptune.errors import InputError, LibraryError
 from taptune.io.atomic import atomic_write, atomic_write_bytes
+from taptune.library import bulk
+from taptune.library.bulk import _compact, library_document_head  # noqa: F401  (library_document_head: public here)
 from taptune.library.schema import (PARAM_UNITS, SCHEMA, HolderEntry, LibraryFormatError, decode, encode, parse_library,
                                     refuse_implausible)
 from taptune.model.params import NAMES
@@ -75,16 +77,6 @@ def iter_library_file(path: str | os.PathLike, chunk: int = _CHUNK):
     """
     for name, entry, _ in _iter_holders(path, chunk):
         yield name, entry
-
-
-def _compact(text: str) -> str:
-    """JSON ``text`` without the indentation after each line break.
-
-    A JSON string holds no raw line break and valid JSON never puts two values side by
-    side, so what follows a line break is whitespace between tokens: the text decodes to
-    the same value.
-    """
-    return "".join(map(str.lstrip, text.split("\n")))
 
 
 def _iter_holders(path: str | os.PathLike, chunk: int = _CHUNK):
@@ -316,12 +308,6 @@ def export_entries(entries: dict[str, HolderEntry], out: str | os.PathLike, form
     return len(entries)
 
 
-def library_document_head(version: int) -> str:
-    """The start of a library JSON document up to the opening brace of ``holders`` (as :func:`encode` writes it)."""
-    head = json.dumps({"schema": SCHEMA, "version": version, "holders": {}}, indent=2)
-    return head[: head.rindex("{}") + 1]
-
-
 def holder_json(name: str, entry: HolderEntry) -> str:
     """One ``"name": {...}`` member of ``holders``, indented as :func:`encode` writes it."""
     body = json.dumps(entry.to_dict(), indent=2, ensure_ascii=False, allow_nan=False).replace("\n", "\n    ")
@@ -423,6 +409,11 @@ def import_library(lib, file: str | os.PathLike, replace: bool = False) -> Impor
     except OSError:
         size = 0
     streamed = size > WHOLE_FILE_BYTES and hasattr(lib, "export_version")
+    if streamed and bulk.workers() > 1:
+        try:
+            return _import_parallel(lib, file, replace, bulk.workers())
+        except bulk.NotParallel:
+            pass  # rolled back: the serial reader below reports the problem (or reads the other layout)
     holders = (_iter_holders(file) if streamed
                else ((name, entry, None) for name, entry in read_library_file(file).items()))
     parts: list[ImportReport] = []
@@ -433,10 +424,46 @@ def import_library(lib, file: str | os.PathLike, replace: bool = False) -> Impor
                 break
             parts.append(_merge_batch(tx, {name: entry for name, entry, _ in batch}, replace, file,
                                       {name: document for name, _, document in batch if document is not None}))
+    return _combined(file, parts, replace)
+
+
+def _combined(file, parts: list[ImportReport], replace: bool) -> ImportReport:
     return ImportReport(str(file), *(tuple(sorted(n for p in parts for n in getattr(p, k)))
                                      for k in ("added", "merged", "skipped")),
                         tuple(sorted((c for p in parts for c in p.conflicts), key=lambda c: c.name)),
                         bool(replace and any(p.conflicts for p in parts)))
+
+
+def _import_parallel(lib, file, replace: bool, processes: int) -> ImportReport:
+    """:func:`import_library` of a large export into a database, decoded by ``processes``
+    workers (:mod:`taptune.library.bulk`); raises bulk.NotParallel, with the transaction
+    rolled back, when the serial reader must take over.
+
+    A holder the library does not hold yet is written from the workers' row; one it holds
+    is decoded again here and merged as the serial import merges it.
+    """
+    parts: list[ImportReport] = []
+    with lib._transaction() as tx:
+        for holders in bulk.parallel_holders(file, processes, tx.row):
+            current = tx.load_many(sorted(name for name, *_ in holders))
+            rows, added, known = [], [], {}
+            for name, document, row, hashes, warned in holders:
+                if name in current:
+                    known[name] = document
+                    continue
+                if warned:
+                    where = f"{file}: holder {name!r}"
+                    refuse_implausible(HolderEntry.from_dict(decode(document.encode(), where), where), where,
+                                       "nothing was imported")
+                rows.append((row, document, hashes))
+                added.append(name)
+            tx.store_rows(rows)
+            parts.append(ImportReport(str(file), tuple(added), (), (), (), False))
+            if known:
+                theirs = {name: HolderEntry.from_dict(decode(document.encode(), f"{file}: holder {name!r}"),
+                                                      f"{file}: holder {name!r}") for name, document in known.items()}
+                parts.append(_merge_batch(tx, theirs, replace, file, known))
+    return _combined(file, parts, replace)
 
 
 def _merge_batch(tx, theirs: dict[str, HolderEntry], replace: bool, file, documents: dict[str, str]) -> ImportReport:

@@ -114,6 +114,9 @@ _UPSERT_DOCUMENT = ("INSERT INTO documents (name, document) VALUES (?, ?) "
 
 
 class _SqlTransaction(Transaction):
+    #: (row, document, hashes) of an entry as :meth:`store_rows` takes them.
+    row = staticmethod(entry_row)
+
     def __init__(self, lib: "SqlLibrary", cursor):
         self.lib, self.cursor = lib, cursor
 
@@ -124,14 +127,18 @@ class _SqlTransaction(Transaction):
         return self.lib._documents(self.cursor, names)
 
     def store(self, entry, document=None):
-        row, document, hashes = entry_row(entry, document)
+        self.store_rows([entry_row(entry, document)])
+
+    def store_rows(self, rows):
+        """Store holders given as :func:`entry_row` triples (a bulk import's workers make them)."""
         q = self.lib._q
-        self.cursor.execute(q(_UPSERT_HOLDER), row)
-        self.cursor.execute(q(_UPSERT_DOCUMENT), (entry.name, document))
-        self.cursor.execute(q("DELETE FROM recordings WHERE name = ?"), (entry.name,))
+        names = [(row[0],) for row, _, _ in rows]
+        self.cursor.executemany(q(_UPSERT_HOLDER), [row for row, _, _ in rows])
+        self.cursor.executemany(q(_UPSERT_DOCUMENT), [(row[0], document) for row, document, _ in rows])
+        self.cursor.executemany(q("DELETE FROM recordings WHERE name = ?"), names)
+        hashes = [(h, row[0]) for row, _, hs in rows for h in hs]
         if hashes:
-            self.cursor.executemany(q("INSERT INTO recordings (sha256, name) VALUES (?, ?)"),
-                                    [(h, entry.name) for h in hashes])
+            self.cursor.executemany(q("INSERT INTO recordings (sha256, name) VALUES (?, ?)"), hashes)
 
     def delete(self, name):
         q = self.lib._q
