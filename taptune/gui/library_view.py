@@ -46,12 +46,13 @@ def _param_row(label: str, value: float, spread: float, unit: str, fmt: str) -> 
     """One parameter as a table row; a spread wider than the value reads 'not determined' (as in the Fit view)."""
     e = html.escape
     # Labels keep their words whole: the details pane is narrow at 1366×768.
-    name = f"<td style='white-space:nowrap'>{e(label)}</td>"
+    whole = "style='white-space:nowrap'"
+    name, unit_cell = f"<td {whole}>{e(label)}</td>", f"<td>{e(unit)}</td>"  # a long unit may wrap
     if determined(value, spread):
-        return (f"<tr>{name}<td align=right>{e(number(value, fmt))}</td>"
-                f"<td align=right>± {e(number(spread, fmt))}</td><td>{e(unit)}</td></tr>")
-    return (f"<tr>{name}<td colspan=2 align=center style='color:#666666'>{NOT_DETERMINED}</td>"
-            f"<td>{e(unit)}</td></tr>")
+        return (f"<tr>{name}<td align=right {whole}>{e(number(value, fmt))}</td>"
+                f"<td align=right {whole}>± {e(number(spread, fmt))}</td>{unit_cell}</tr>")
+    return (f"<tr>{name}<td colspan=2 align=center style='color:#666666; white-space:nowrap'>{NOT_DETERMINED}</td>"
+            f"{unit_cell}</tr>")
 
 
 def entry_html(entry) -> str:
@@ -161,7 +162,7 @@ class LibraryView(QWidget):
         left_layout.addWidget(self.table, 1)
 
         # The table gets the larger share: names of 40 characters and five columns at 1366 px.
-        split = hsplit(left, self.details, stretch=(5, 3))
+        split = hsplit(left, self.details, stretch=(4, 3))
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.path_label)
