@@ -12,12 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from taptune.cli import main
 from taptune.library import HolderLibrary, store
 from taptune.library.exchange import frequency_grid, holder_receptance
 from tests.library.entries import REFERENCE, make_entry
 from tests.library.pg import pg_url, postgres_server  # noqa: F401  (fixtures)
 from tests.library.test_schema import Exploit
+from tests.cli_run import taptune
 
 REPO = Path(__file__).resolve().parents[2]
 ER32 = "ER32 collet chuck HSK-A63 x 100"
@@ -31,12 +31,6 @@ def lib(tmp_path, monkeypatch) -> HolderLibrary:
     lib.put(make_entry(ER32, records=2))
     lib.put(make_entry("Shrink fit D16", scale=1.4, records=1, first=5))
     return lib
-
-
-def taptune(capsys, *argv) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def one_line(err: str) -> str:

@@ -13,28 +13,14 @@ import shutil
 import numpy as np
 import pytest
 
-from taptune.cli import main
 from tests.conftest import REPO
+from tests.cli_run import one_line_error, taptune
 
 RECORDINGS = REPO / "recordings"
 DEMO = [RECORDINGS / "er32_d16.toml", "--params", RECORDINGS / "er32_d16.params.json",
         "--machine", RECORDINGS / "machine" / "machine.toml"]
 D01 = REPO.parent / "shared" / "cases-dev" / "machine-d01"
 needs_d01 = pytest.mark.skipif(not D01.is_dir(), reason="the machine-d01 check case is not here")
-
-
-def taptune(capsys, *argv) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line_error(capsys, *argv) -> str:
-    """Run a command that must fail on bad input: exit 2, one line on stderr, no traceback."""
-    code, out, err = taptune(capsys, *argv)
-    assert code == 2, (out, err)
-    assert err.count("\n") == 1 and "Traceback" not in err, err
-    return err
 
 
 def relative_error(a, b) -> np.ndarray:

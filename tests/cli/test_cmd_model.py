@@ -9,18 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from taptune.cli import main
 from tests.conftest import REFERENCE_TOML
+from tests.cli_run import taptune
 
 REPO = Path(__file__).resolve().parents[2]
 HOLDER_A = {"k_tt": 1.90e9, "k_rr": 9.37e3, "eta_tt": 1.98e-3, "eta_rr": 8.20e-3,
             "alpha": -10.0, "density_factor": 7478 / 7800, "modulus_factor": 1.0}
-
-
-def taptune(capsys, *argv) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_nominal_model_prints_a_table_and_writes_the_contract_json(reference_toml, tmp_path, capsys):

@@ -7,30 +7,17 @@ import json
 import pytest
 
 from benchmarks.cut.sounds import lines_cut
-from taptune.cli import main
 from taptune.io.audio import write_audio
 from taptune.library.store import HolderLibrary
 from tests.conftest import REPO
 from tests.library.entries import make_entry
+from tests.cli_run import one_line_error, taptune
 
 HOLDER = "ER32 collet chuck HSK-A63 x 100"
 MACHINE = ["--assembly", REPO / "recordings" / "er32_d16.toml", "--machine", REPO / "recordings" / "machine" / "machine.toml"]
 CUT = ["--depth", 2, "--ae", 8, "--milling", "down", "--material", "al7075"]
 KEYS = {"verdict", "chatter_hz", "spindle_rpm", "tooth_passing_hz", "chatter_level_db", "suggested_rpm",
         "suggestion_basis", "warnings"}
-
-
-def taptune(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line_error(capsys, *argv) -> str:
-    code, out, err = taptune(capsys, *argv)
-    assert code == 2, (out, err)
-    assert err.count("\n") == 1 and "Traceback" not in err, err
-    return err
 
 
 @pytest.fixture(scope="module")
