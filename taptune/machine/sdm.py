@@ -382,8 +382,8 @@ def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
 
 def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
     """Whether the batches of speeds go to ``workers`` forked processes: only from the main
-    thread (a fork from a thread of the app could copy a lock another thread holds) and only
-    when the work pays for their start (~0.1 s)."""
+    thread (a fork from a thread of the app could copy a lock another thread holds) of a
+    process that may have children, and only when the work pays for their start (~0.1 s)."""
     import multiprocessing
     import threading
 
@@ -391,6 +391,10 @@ def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
     if workers < 2 or hi / lo < 1.2 or "fork" not in multiprocessing.get_all_start_methods():
         return False
     if threading.current_thread() is not threading.main_thread():
+        return False
+    # A worker of a pool (taptune batch) is daemonic and may have no children; its pool
+    # already keeps the cores busy.
+    if multiprocessing.current_process().daemon:
         return False
     samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
     return float(np.sum(_cost(modes_x, modes_y, samples, cut))) >= PARALLEL_WORK
