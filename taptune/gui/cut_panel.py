@@ -229,7 +229,7 @@ class CutPanel(QWidget):
         for artist in self._marks:
             try:
                 artist.remove()
-            except (ValueError, NotImplementedError):  # the figure was cleared under it
+            except (ValueError, NotImplementedError):  # matplotlib refuses to remove an artist whose figure was cleared
                 pass
         self._marks = []
         key = (getattr(self.view.source, "label", None), self.view.cut().teeth, self.view.cut().milling)

@@ -22,7 +22,8 @@ from __future__ import annotations
 import difflib
 import os
 import sys
-from contextlib import contextmanager
+import contextlib
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
@@ -148,25 +149,27 @@ def suggestions(query: str, names: Iterable[str]) -> list[str]:
 # --------------------------------------------------------------------------- the library
 
 
-class Transaction:
+class Transaction(ABC):
     """What a store gives a change while it holds the library's write lock (see :meth:`HolderLibrary._transaction`)."""
 
-    def load(self, name: str) -> HolderEntry | None:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abstractmethod
+    def load(self, name: str) -> HolderEntry | None:
+        """The holder called ``name`` as stored now, or None."""
 
     def load_many(self, names: list[str]) -> dict[str, HolderEntry]:
         return {n: e for n in names if (e := self.load(n)) is not None}
 
-    def store(self, entry: HolderEntry, document: str | None = None) -> None:  # pragma: no cover - interface
+    @abstractmethod
+    def store(self, entry: HolderEntry, document: str | None = None) -> None:
         """Write ``entry``. ``document``: its JSON when the caller has it already, as text that
         decodes to what ``entry`` was checked from (a bulk import spares the encoding)."""
-        raise NotImplementedError
 
-    def delete(self, name: str) -> None:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abstractmethod
+    def delete(self, name: str) -> None:
+        """Remove the holder called ``name``."""
 
 
-class HolderLibrary:
+class HolderLibrary(ABC):
     """The holder library at ``location`` (a file path or a PostgreSQL URL).
 
     Parameters
@@ -216,39 +219,38 @@ class HolderLibrary:
 
     # ---- reading: every store implements these
 
-    def _load(self, name: str) -> HolderEntry | None:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abstractmethod
+    def _load(self, name: str) -> HolderEntry | None:
+        """The holder called ``name``, or None when there is none."""
 
+    @abstractmethod
     def summaries(self, match: str | None = None, limit: int | None = None, offset: int = 0) -> list[HolderSummary]:
         """The holders whose name contains ``match`` (case-insensitive), sorted by name, without their history."""
-        raise NotImplementedError  # pragma: no cover - interface
 
+    @abstractmethod
     def count(self, match: str | None = None) -> int:
         """How many holders' names contain ``match`` (all without one)."""
-        raise NotImplementedError  # pragma: no cover - interface
 
+    @abstractmethod
     def page(self, match: str | None = None, limit: int | None = None, offset: int = 0) -> dict[str, HolderEntry]:
         """Whole holders (with history) whose name contains ``match``, sorted by name: ``limit`` from ``offset``."""
-        raise NotImplementedError  # pragma: no cover - interface
 
+    @abstractmethod
     def _candidates(self, query: str) -> list[str]:
         """A bounded set of names worth comparing with ``query`` (for "did you mean")."""
-        raise NotImplementedError  # pragma: no cover - interface
 
+    @abstractmethod
     def with_recordings(self, sha256s: Iterable[str]) -> dict[str, HolderEntry]:
         """The holders whose identifications include one of these recordings (by SHA-256)."""
-        raise NotImplementedError  # pragma: no cover - interface
 
-    @contextmanager
-    def _transaction(self) -> Iterator[Transaction]:  # pragma: no cover - interface
+    @abstractmethod
+    def _transaction(self) -> contextlib.AbstractContextManager[Transaction]:
         """Hold the library's write lock; yield a :class:`Transaction`; commit when the block ends
-        normally, write nothing when it raises."""
-        raise NotImplementedError
-        yield
+        normally, write nothing when it raises (a ``contextmanager`` in every store)."""
 
+    @abstractmethod
     def check_writable(self) -> None:
         """Raise a one-line error now if the library cannot be read or changed (before a long fit)."""
-        raise NotImplementedError  # pragma: no cover - interface
 
     # ---- reading: shared
 
