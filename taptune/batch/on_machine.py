@@ -134,7 +134,7 @@ def _warnings(assembly, machine, lobes) -> list[str]:
 
 
 def skipped_note(row, data: dict | None, setup: MachineSetup | None, assembly, json_path: Path | None = None,
-                 params=None):
+                 params=None, model_options=None):
     """A skipped row with its machine numbers: those of its previous result JSON ``data`` when
     they were computed on the same machine file with the same cut and contact, else computed
     now from the parameters identified before (``params``, or the JSON's ``params``); the
@@ -153,13 +153,11 @@ def skipped_note(row, data: dict | None, setup: MachineSetup | None, assembly, j
         if params is None or json_path is None:
             return replace(row, message=f"{row.message}; machine part not run: the parameters identified before "
                                         "are not at hand (--force to identify it again with --machine)")
-        part = machine_part(params, None, assembly, setup, json_path)
+        part = machine_part(params, model_options, assembly, setup, json_path)
         if data is not None and json_path.is_file():
-            from taptune.io.atomic import atomic_write_bytes
+            from taptune.cli.common import write_json
 
-            import json
-
-            atomic_write_bytes(json_path, (json.dumps({**data, "machine": part.record}, indent=2) + "\n").encode())
+            write_json({**data, "machine": part.record}, str(json_path))
         if part.error:
             return replace(row, message=f"{row.message}; {MACHINE_FAILED} {part.error}")
         best = part.best_pocket or (None, None)

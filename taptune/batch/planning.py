@@ -137,7 +137,8 @@ def _skip_from_library(item: Item, entries: dict, group_hashes: frozenset[str], 
             row = Row(str(item.path), item.holder, "skipped", first_three(record.bending_measured_hz),
                       first_three(record.bending_model_hz), record.objective, None,
                       f"identified before (same sha256 {item.sha256[:12]} in the library, {record.date})")
-            return skipped_note(row, None, machine, item.assembly, item.json_path, entry.params)
+            return skipped_note(row, None, machine, item.assembly, item.json_path, entry.params,
+                                model_options=entry.options() if machine is not None else None)
     return None
 
 

@@ -296,9 +296,17 @@ def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(top), top
 
 
+def _check_teeth(teeth) -> None:
+    if isinstance(teeth, bool) or int(teeth) != teeth or teeth < 1:
+        raise InputError(f"the number of teeth must be a whole number >= 1, got {teeth!r}")
+
+
 def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
                rpm: float, depth, steps_per_mode: float | None = None, nodes: int | None = None):
     """Largest Floquet multiplier |μ| and μ at one speed for each depth [m] (array)."""
+    _check_teeth(teeth)
+    if not (np.isfinite(rpm) and rpm > 0):
+        raise InputError(f"the spindle speed must be finite and > 0 rpm, got {rpm!r}")
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     a = np.atleast_1d(np.asarray(depth, dtype=float))
@@ -354,6 +362,7 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     -------
     SdmLobes
     """
+    _check_teeth(teeth)
     speeds = np.asarray(rpm, dtype=float)
     if speeds.ndim != 1 or speeds.size == 0 or np.any(~(speeds > 0)) or np.any(~np.isfinite(speeds)):
         raise InputError("the spindle speeds must be finite and > 0 rpm")

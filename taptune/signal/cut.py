@@ -664,6 +664,10 @@ def smith_tlusty_speeds(chatter_hz: float, teeth: int, rpm: float, *, min_rpm: f
     [``min_rpm``, ``max_rpm``] (no upper limit when None, then at most twice ``rpm``),
     nearest to the current speed ``rpm`` first, at most ``count``.
     """
+    if isinstance(teeth, bool) or int(teeth) != teeth or teeth < 1:
+        raise InputError(f"the number of teeth must be a whole number >= 1, got {teeth!r}")
+    if not (np.isfinite(rpm) and rpm > 0 and np.isfinite(chatter_hz) and chatter_hz > 0):
+        raise InputError(f"the spindle speed and the chatter frequency must be > 0, got {rpm!r} rpm, {chatter_hz!r} Hz")
     top = 2.0 * rpm if max_rpm is None else max_rpm
     j_min = max(1, int(np.ceil(60 * chatter_hz / (teeth * top) - 1e-9)))
     out = []

@@ -447,10 +447,13 @@ def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
         dbl = is_double_hit(x, on, fs, double_hit_window_s)
         taps.append(Tap(onset=on, time_s=on / fs, end=end, peak=peak, snr_db=float(snr),
                         clipped=clipped, double_hit=dbl, used=not (clipped or dbl), clip_level=clip_level))
-    loudest = max(t.peak for t in taps)
     taps = [t if rings_down(envelope(x[t.onset:t.end], fs, 2e-3), 0, t.end - t.onset, fs)
             and ring_time(env, t.onset, fs) >= min_ring_s
             else replace(t, used=False, rejected="no ring-down") for t in taps]
+    # "Faint" is measured against the loudest *tap*: a loud sound that is no tap (a held
+    # tone, a clank) must not make the real taps faint.
+    ringing = [t.peak for t in taps if not t.rejected]
+    loudest = max(ringing) if ringing else 0.0
     taps = [replace(t, used=False, rejected="faint") if t.peak < loudest * 10 ** (-faint_db / 20) and not t.rejected
             else t for t in taps]
     if not any(t.used for t in taps):

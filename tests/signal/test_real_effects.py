@@ -264,3 +264,23 @@ def test_without_an_assembly_a_loud_peak_below_1_khz_is_named_not_guessed():
     assert [p.kind for p in labeled] == ["other", "other", "bending"]
     low = [w for w in warnings if "below 1000 Hz" in w]
     assert len(low) == 1 and "loudest 164 Hz" in low[0] and "cannot be bending" in low[0]
+
+
+def test_a_loud_sound_that_is_no_tap_does_not_make_the_real_taps_faint():
+    """Three soft taps (peak 0.02) and a held tone 33 dB louder: 'faint' is judged against
+    the loudest tap, so the taps are kept and only the tone is left out (a review found
+    all three taps refused as faint)."""
+    from taptune.signal.taps import find_taps
+
+    fs = 48000
+    rng = np.random.default_rng(7)
+    x = 1e-5 * rng.standard_normal(3 * fs)
+    t = np.arange(int(0.3 * fs)) / fs
+    for on in (0.2, 0.8, 1.4):
+        i = int(on * fs)
+        x[i:i + t.size] += 0.02 * np.exp(-30 * t) * np.sin(2 * np.pi * 3000 * t)
+    tone = np.arange(int(0.9 * fs)) / fs
+    x[2 * fs:2 * fs + tone.size] += 0.9 * np.sin(2 * np.pi * 440 * tone)
+    taps = find_taps(x, fs)
+    assert [round(tp.time_s, 1) for tp in taps if tp.used] == [0.2, 0.8, 1.4]
+    assert [tp.rejected for tp in taps if not tp.used] == ["no ring-down"]
