@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from taptune.errors import InputError
+from taptune.signal.peaks import parabolic_peak
 
 #: Verdicts of a cut.
 VERDICTS = ("stable", "chatter", "unclear")
@@ -234,11 +235,8 @@ def _background(level_db, bins: int) -> np.ndarray:
 def _peak_value(f, y, i):
     """Parabolic interpolation of the maximum at bin i: (frequency, value)."""
     if 0 < i < len(y) - 1:
-        a, b, c = y[i - 1], y[i], y[i + 1]
-        den = a - 2 * b + c
-        d = 0.5 * (a - c) / den if den < 0 else 0.0
-        d = float(np.clip(d, -0.5, 0.5))
-        return float(f[i] + d * (f[1] - f[0])), float(b - 0.25 * (a - c) * d)
+        d, value = parabolic_peak(y, i)
+        return float(f[i] + d * (f[1] - f[0])), float(value)
     return float(f[i]), float(y[i])
 
 
