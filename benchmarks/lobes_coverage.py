@@ -364,7 +364,14 @@ def main(argv=None) -> int:
         before.pop("per_site")
         meta = {"split": args.split, "tiers": args.tier, "n_per_tier": args.n, "confidence": CONFIDENCE,
                 "rpm": RPM, "cuts": CUTS, "material": MATERIAL, "depth_model_form": DEPTH_MODEL_FORM}
-        out = {"meta": meta, "before": before, "after": after, "model_form_sweep": sweep}
+        by_tier = {}
+        for t in args.tier:
+            mine = [x for x in sites if x["tier"] == t]
+            if mine:
+                by_tier[t] = {"before": summarise(mine, -1.0), "after": summarise(mine)}
+                for v in by_tier[t].values():
+                    v.pop("per_site")
+        out = {"meta": meta, "before": before, "after": after, "by_tier": by_tier, "model_form_sweep": sweep}
         Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
     return 0
 
