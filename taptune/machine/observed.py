@@ -14,7 +14,7 @@ sets' weights are the products over the cuts (Bayes with equal priors), and the 
 the weighted spread of their limits per speed.
 
 In the product the sets are the samples of the holder's band (:mod:`taptune.machine.band`:
-every tool-point modal frequency × s, stiffness × s², limit s² a(n/s)), so weighing them
+every tool-point modal frequency × s, stiffness × s², the FRF ÷ g, limit g s² a(n/s)), so weighing them
 costs one interpolation per sample and cut. The weighted samples give the band again
 (resampled at evenly spaced quantiles of their weights: the safe depth and the safe
 pockets are then computed as without observations), how much it narrowed, and the cuts
@@ -25,7 +25,8 @@ Signatures::
     set_weights(limits, depths, verdicts, sigma=SIGMA) -> ndarray (n_sets,)
     weighted_band(a_lim, weights, quantiles=(0.05, 0.5, 0.95)) -> ndarray (len(quantiles), n_speeds)
     comparable(observations, *, teeth, ae_mm, milling, ktc_mpa, krc_mpa) -> list
-    observed_band(rpm_ext, a_ext, inner, scales, cuts, confidence, depth_cap=inf, sources="") -> ObservedBand
+    observed_band(rpm_ext, a_ext, inner, scales, cuts, confidence, depth_cap=inf, sources="",
+                  magnitudes=None) -> ObservedBand
     lobes_with_observations(freq_hz, phi_xx, phi_yy, *, cuts, band, ..., confidence=0.9) -> (Lobes, ObservedBand)
 """
 
@@ -153,13 +154,19 @@ def resampled(scales, weights) -> np.ndarray:
     """As many factors as ``scales``, drawn at evenly spaced quantiles of the weights (systematic
     resampling, deterministic): equal-weight samples that the band's quantiles can take as they are."""
     s = np.asarray(scales, float)
-    cw = np.cumsum(weights) / np.sum(weights)
-    i = np.searchsorted(cw, (np.arange(len(s)) + 0.5) / len(s))
-    return s[np.minimum(i, len(s) - 1)]
+    return s[_resampled_index(weights)]
+
+
+def _resampled_index(weights) -> np.ndarray:
+    """Indices of :func:`resampled`: as many as weights, at evenly spaced quantiles of them."""
+    w = np.asarray(weights, float)
+    cw = np.cumsum(w) / np.sum(w)
+    i = np.searchsorted(cw, (np.arange(len(w)) + 0.5) / len(w))
+    return np.minimum(i, len(w) - 1)
 
 
 def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float, depth_cap: float = np.inf,
-                  sources: str = "", sigma: float = SIGMA) -> ObservedBand:
+                  sources: str = "", sigma: float = SIGMA, magnitudes=None) -> ObservedBand:
     """The band of :func:`taptune.machine.band.lobe_band` with its samples weighed by the observed ``cuts``.
 
     Parameters
@@ -171,6 +178,8 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
         and ``unclear`` ones carry no weight.
     sigma : float
         Relative scatter of a limit the samples do not capture (:data:`SIGMA`).
+    magnitudes : ndarray, optional
+        The samples' FRF magnitude divisors g (:func:`taptune.machine.band.band_samples`; default 1).
 
     Returns
     -------
@@ -182,8 +191,9 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
     from taptune.machine.band import lobe_band, safe_pockets, sample_limits, LobeBand
 
     s = np.asarray(scales, float)
+    g = np.ones_like(s) if magnitudes is None else np.asarray(magnitudes, float)
     rpm = np.asarray(rpm_ext, float)[inner]
-    prior = lobe_band(rpm_ext, a_ext, inner, s, confidence, depth_cap, sources)
+    prior = lobe_band(rpm_ext, a_ext, inner, s, confidence, depth_cap, sources, g)
     inside = [(float(n), float(d), v) for n, d, v in cuts
               if v in ("stable", "chatter") and rpm[0] <= n <= rpm[-1] and d > 0]
     lo_q, hi_q = (1 - confidence) / 2, (1 + confidence) / 2
@@ -194,7 +204,7 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
     n_obs = np.array([c[0] for c in inside])
     depth = np.array([c[1] for c in inside])
     verdicts = [c[2] for c in inside]
-    lim = np.minimum(sample_limits(rpm_ext, a_ext, n_obs, s), depth_cap)  # (samples, cuts)
+    lim = np.minimum(sample_limits(rpm_ext, a_ext, n_obs, s, g), depth_cap)  # (samples, cuts)
     warnings = []
     for j, (n, d, v) in enumerate(inside):
         p_stable = float(np.mean(lim[:, j] > d))
@@ -220,9 +230,11 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
                         "model is off (tap the assembly again), or the chatter is not the tool's")
     # The weighted samples, resampled to equal weights, give the band as without observations;
     # the safe depth is capped by the weighted median sample's limit (not the central lobes').
-    rs = resampled(s, w)
-    samples = np.minimum(sample_limits(rpm_ext, a_ext, rpm, rs), depth_cap)
-    median = np.minimum(sample_limits(rpm_ext, a_ext, rpm, [_weighted_quantile(s, w, 0.5)])[0], depth_cap)
+    idx = _resampled_index(w)
+    rs = s[idx]
+    samples = np.minimum(sample_limits(rpm_ext, a_ext, rpm, rs, g[idx]), depth_cap)
+    median = np.minimum(sample_limits(rpm_ext, a_ext, rpm, [_weighted_quantile(s, w, 0.5)],
+                                      [_weighted_quantile(g, w, 0.5)])[0], depth_cap)
     low = np.minimum(np.quantile(samples, 1 - confidence, axis=0, method="inverted_cdf"), median)
     high = np.maximum(np.quantile(samples, confidence, axis=0, method="inverted_cdf"), low)
     text = (f"{sources}; weighed by {len(inside)} observed cut(s)" if sources else
@@ -237,21 +249,22 @@ def lobes_with_observations(freq_hz, phi_xx, phi_yy, *, teeth: int, ktc: float, 
                             depth_cap: float = np.inf, modes=None):
     """The central lobes on ``rpm`` and the holder's band weighed by the observed ``cuts``.
 
-    As :func:`taptune.machine.band.lobes_with_band` (``band`` = (relative half-width,
-    coverage, sources) of :func:`taptune.machine.band.band_from_prediction`), then
+    As :func:`taptune.machine.band.lobes_with_band` (``band`` as
+    :func:`taptune.machine.band.band_from_prediction` gives it), then
     :func:`observed_band` with ``cuts`` = (rpm, depth [m], verdict) of the same cut.
 
     Returns
     -------
     (taptune.machine.lobes.Lobes, ObservedBand)
     """
-    from taptune.machine.band import NO_BAND, check_confidence, extended_grid, scale_samples
+    from taptune.machine.band import NO_BAND, band_parts, band_samples, check_confidence, extended_grid
     from taptune.machine.lobes import stability_lobes
 
     check_confidence(confidence)
-    rel, coverage, sources = band if band is not None else (0.0, 0.9, NO_BAND)
-    scales = scale_samples(rel, coverage)
+    rel, coverage, sources, depth = band_parts(band if band is not None else (0.0, 0.9, NO_BAND))
+    scales, magnitudes = band_samples(rel, coverage, depth)
     ext, inner = extended_grid(rpm, scales)
     wide = stability_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
                            milling=milling, rpm=ext, method=method, depth_cap=depth_cap, modes=modes)
-    return wide.on(inner), observed_band(ext, wide.a_lim, inner, scales, cuts, confidence, depth_cap, sources)
+    return wide.on(inner), observed_band(ext, wide.a_lim, inner, scales, cuts, confidence, depth_cap, sources,
+                                         magnitudes=magnitudes)

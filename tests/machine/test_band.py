@@ -109,3 +109,17 @@ def test_lobes_command_with_a_tolerance_writes_the_band_keys(tmp_path, capsys):
     code, _, err = run(capsys, "lobes", "--frf", DATA / "end_mill_x.frf", "--diameter", 12, "--teeth", 3, "--ktc", 902,
                        "--krc", 243, "--ae", 3, "--milling", "down", "--confidence", 1.5)
     assert code == 2 and err.count("\n") == 1 and "--confidence must lie strictly between 0.5 and 1" in err
+
+
+def test_a_band_of_three_has_no_stiffness_part_and_the_damping_spread_adds_in_quadrature():
+    from taptune.machine.band import DEPTH_MODEL_FORM, band_parts, band_samples, depth_band
+
+    assert band_parts((0.02, 0.9, "x")) == (0.02, 0.9, "x", 0.0)
+    assert band_parts((0.02, 0.9, "x", 0.3))[3] == 0.3
+    assert depth_band(0.002, 0.0015) == pytest.approx(np.hypot(0.75, DEPTH_MODEL_FORM))
+    s, g = band_samples(0.02, 0.9, 0.3)
+    assert s.size == g.size == 64 and abs(np.corrcoef(s, np.log(g))[0, 1]) < 0.1  # independent
+    # ±30 % read as a 90 % band of ln g: 90 % of the samples inside [1/1.3, 1.3].
+    assert np.mean((g > 1 / 1.3) & (g < 1.3)) == pytest.approx(0.9, abs=0.04)
+    s1, g1 = band_samples(0.02, 0.9, 0.0)
+    np.testing.assert_array_equal(g1, 1.0)
