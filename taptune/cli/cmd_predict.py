@@ -35,7 +35,11 @@ def run(args) -> int:
     output_path(args.json, "JSON", library=args.library, inputs=inputs)
     output_path(args.plot, "plot", library=args.library, inputs=inputs)
     assembly = load_assembly(args.assembly)
-    entry = HolderLibrary(default_library_path(args.library)).get(args.holder)
+    library = HolderLibrary(default_library_path(args.library))
+    try:
+        entry = library.get(args.holder)
+    finally:
+        library.close()  # before the work: the process may end without closing it (cli.FAST_EXIT)
     warnings = list(entry.warnings) + list(assembly.warnings)
     if assembly.holder.name != entry.name:
         warnings.append(

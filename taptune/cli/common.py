@@ -122,7 +122,6 @@ _INPUT_ARGS = ("wav", "assembly", "params", "machine", "frf", "dummy", "aa", "ab
 def command_inputs(args) -> list[str]:
     """The files a command reads (recordings, assembly, machine files and the spindle files a
     machine file names, the interface-band table of ``$TAPTUNE_INTERFACE_BANDS`` …)."""
-    from taptune.io.machine import machine_file_inputs
     from taptune.io.files import BANDS_ENV
 
     out: list[str] = []
@@ -132,6 +131,8 @@ def command_inputs(args) -> list[str]:
         out += [str(v) for v in values if isinstance(v, (str, os.PathLike)) and str(v) not in ("", "-")]
     machine = getattr(args, "machine", None)
     if isinstance(machine, (str, os.PathLike)) and str(machine):
+        from taptune.io.machine import machine_file_inputs  # only when there is one (a 25 ms import)
+
         out += machine_file_inputs(machine)
     if os.environ.get(BANDS_ENV):
         out.append(os.environ[BANDS_ENV])

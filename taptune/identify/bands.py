@@ -306,7 +306,7 @@ def geometry_term(assembly, params, identified, tolerances: Tolerances, model_op
         # Each stick-out was read when its recording was made, to the tolerance its file
         # stated then; the holder's diameters and the flute ratio are the ones stated now.
         ids = [relative_sensitivities(a, params, replace(tolerances, stickout=a.tolerances.stickout), model_options,
-                                      f.size) for a in identified]
+                                      f.size, f if a == assembly else None) for a in identified]
         so = [s["stickout"] for s in ids if "stickout" in s]
         if so:
             # Independent ruler errors, one per recording: their mean error enters.

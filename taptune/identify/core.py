@@ -16,7 +16,7 @@ uncertainty that ``predict`` reports.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, is_dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -24,7 +24,7 @@ import numpy as np
 from taptune.errors import InputError
 from taptune.io.assembly import Tolerances
 from taptune.identify.objective import Objective, ObjectiveOptions, Target, make_target, model_shape, objective_terms
-from taptune.identify import bands, search
+from taptune.identify import bands
 from taptune.identify.bands import Band
 from taptune.identify.optimize import Cancelled, GAOptions
 from taptune.model.params import NAMES, HolderParams, from_p, p_to_unit, to_p, unit_to_p
@@ -198,6 +198,7 @@ def identify(
     -------
     Identification
     """
+    from taptune.identify import search  # the optimisers' processes: not loaded by predict
     from taptune.model import build_model, solve_modes, tip_receptance
 
     t0 = time.perf_counter()
@@ -328,7 +329,10 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         z.append(np.asarray(modes.damping_ratio[:n_modes], dtype=float))
     f, z = np.array(f), np.array(z)
     tol = tolerances if tolerances is not None else getattr(assembly, "tolerances", Tolerances())
-    identified = list(identified or ())
+    # An identification of this very setup (holder, tool and stick-out) differs from the
+    # predicted assembly only in its name: named alike, it shares the band's cached
+    # sensitivities of the prediction instead of solving the same models again.
+    identified = [_named_as(a, assembly) for a in identified or ()]
     set_hz = np.maximum(np.abs(f - f[0]).max(0), relative_floor * f[0])
     geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0])
     delta = bands.delta_stickout_mm(assembly, identified)
@@ -350,6 +354,14 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         damping_ratio_spread=tuple(map(float, np.abs(z - z[0]).max(0))),
         band=band,
     )
+
+
+def _named_as(identified, assembly):
+    """``identified`` with the name (``source``) of ``assembly`` when that is all they differ in."""
+    if not (is_dataclass(identified) and is_dataclass(assembly)) or identified.source == assembly.source:
+        return identified
+    renamed = replace(identified, source=assembly.source)
+    return renamed if renamed == assembly else identified
 
 
 def fit_misfit(measured_hz, model_hz, floor: float = 5e-4) -> float:

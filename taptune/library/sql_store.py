@@ -639,6 +639,17 @@ class PostgresLibrary(SqlLibrary):
 
     def _prepare(self, conn, create: bool) -> None:
         with self._pg_errors(), conn.transaction(), conn.cursor() as cursor:
+            if not create:
+                # A reader of a library that is there and current takes no lock: it would
+                # wait for every writer's transaction (a predict for the whole of another
+                # computer's bulk import). Making or migrating the tables takes it below.
+                tables = self._existing_tables(cursor)
+                if not tables:
+                    self._ready = False
+                    return
+                if META_TABLE in tables and self._stored_version(cursor) == SCHEMA_VERSION:
+                    self._ready = True
+                    return
             cursor.execute("SELECT pg_advisory_xact_lock(%s)", (PG_LOCK_KEY,))
             self._ready = self._check_schema(cursor, create)
 

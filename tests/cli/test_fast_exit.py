@@ -58,3 +58,22 @@ def test_other_commands_and_profiled_runs_return_to_the_caller():
 def test_main_called_in_process_always_returns():
     proc = run(["identify", "--help"], in_process=True)
     assert proc.returncode == 0 and "main returned 0" in proc.stdout
+
+
+def test_predict_ends_the_process_with_everything_said_and_the_library_closed(tmp_path, reference_toml):
+    import json
+
+    from taptune.library.store import HolderLibrary
+    from tests.library.entries import make_entry
+
+    db = tmp_path / "holders.db"
+    lib = HolderLibrary(db)
+    lib.put(make_entry("A"))
+    lib.close()
+    out = tmp_path / "p.json"
+    proc = run(["predict", str(reference_toml), "--holder", "A", "--library", str(db), "--json", str(out)])
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.rstrip().endswith("atexit ran") and "teardown ran" not in proc.stdout
+    assert "holder: A" in proc.stdout and json.loads(out.read_text())["holder"] == "A"
+    # Closed before the process ended: the last connection of a WAL database removes the WAL.
+    assert not (tmp_path / "holders.db-wal").exists()

@@ -408,3 +408,33 @@ def test_the_holder_texts_read_in_pieces_decode_to_their_entries(tmp_path, chunk
     export_entries(entries, tmp_path / "a.json")
     for name, entry, document in exchange._iter_holders(tmp_path / "a.json", chunk=chunk):
         assert "\n" not in document and json.loads(document) == entry.to_dict() == entries[name].to_dict()
+
+
+def test_a_postgresql_reader_does_not_wait_for_a_writer(pg_url):
+    """Once the tables are there and current, reading takes no lock: a predict on one
+    computer does not wait for another computer's long write (a bulk import holds the
+    library's lock for its whole transaction)."""
+    import threading
+
+    import psycopg
+
+    from taptune.library.sql_store import PG_LOCK_KEY
+
+    lib = HolderLibrary(pg_url)
+    lib.put(make_entry("A"))
+    lib.close()
+    read = []
+
+    def reader():
+        other = HolderLibrary(pg_url)
+        read.append(other.get("A").name)
+        other.close()
+
+    with psycopg.connect(pg_url) as writer:  # a writer inside its transaction, holding the lock
+        writer.execute("SELECT pg_advisory_xact_lock(%s)", (PG_LOCK_KEY,))
+        thread = threading.Thread(target=reader)
+        thread.start()
+        thread.join(10)
+        waited = thread.is_alive()
+    thread.join()
+    assert not waited and read == ["A"]

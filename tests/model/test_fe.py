@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from taptune.model.fe import build_model, rigid_contact_model
+from taptune.model.fe import build_model, mesh_frequency_hz, rigid_contact_model
 from taptune.model.mesh import build_mesh
 from taptune.model.options import ModelOptions
 from taptune.model.params import HolderParams
@@ -200,7 +200,6 @@ def test_explicit_tool_segments_give_the_same_model_as_shank_and_flute_keys(refe
 def test_a_model_meshed_for_its_own_frequency_is_the_model(reference_assembly):
     """build_model's second pass alone, given the frequency its first pass finds, builds
     the same matrices (what the band's tolerance moves rely on)."""
-    from taptune.model.fe import mesh_frequency_hz
 
     full = build_model(reference_assembly)
     again = build_model(reference_assembly, f_max_hz=mesh_frequency_hz(reference_assembly))
@@ -208,3 +207,28 @@ def test_a_model_meshed_for_its_own_frequency_is_the_model(reference_assembly):
         assert (getattr(full, name) != getattr(again, name)).nnz == 0, name
     np.testing.assert_array_equal(full.z_tool, again.z_tool)
     assert mesh_frequency_hz(reference_assembly, ModelOptions(elements_per_wavelength=0)) is None
+
+
+def test_the_pattern_from_element_blocks_is_the_pattern_of_the_scattered_pieces(reference_assembly):
+    """assemble sums the element blocks straight onto the union pattern (block_pattern):
+    the same pattern and the same values, to the last bit, as scattering every piece into
+    its own sparse matrix and taking their union (common_pattern)."""
+    from taptune.model.contact import contact_blocks
+    from taptune.model.fe import PIECES, common_pattern, element_dofs, scatter
+
+    fe = build_model(reference_assembly)
+    mesh = build_mesh(reference_assembly, fe.options, mesh_frequency_hz(reference_assembly))
+    h, t, n = mesh.holder, mesh.tool, fe.n_dofs
+    dofs_h, dofs_t = element_dofs(h.n_elements, 0), element_dofs(t.n_elements, len(h.z))
+    he, te = mesh.contact_elements[:, 0], mesh.contact_elements[:, 1]
+    c = contact_blocks(h.z[he], h.length[he], h.phi()[he], t.phi()[te], mesh.z_zone)
+    dofs_c = np.concatenate([dofs_h[he], dofs_t[te]], axis=1)
+    blocks = {"K_tool": (t.K(), dofs_t), "K_holder": (h.K(), dofs_h), "M_tool": (t.M(fe.options.mass), dofs_t),
+              "M_holder": (h.M(fe.options.mass), dofs_h), "T0": (c.t0, dofs_c), "T1": (c.t1, dofs_c),
+              "R0": (c.r0, dofs_c), "R1": (c.r1, dofs_c)}
+    scattered = common_pattern({name: scatter(b, d, n) for name, (b, d) in blocks.items()}, n)
+    np.testing.assert_array_equal(fe.pattern.indptr, scattered.indptr)
+    np.testing.assert_array_equal(fe.pattern.indices, scattered.indices)
+    for name in PIECES:
+        np.testing.assert_array_equal(fe.pattern.values[name], scattered.values[name])
+        assert (getattr(fe, name) != scatter(*blocks[name], n)).nnz == 0, name
