@@ -21,13 +21,19 @@ The discretisation:
 * The period splits into the active part, where some tooth cuts, and the free flight;
   the free flight is one exact modal exponential, whatever its length.
 * The active part is cut into steps, ``STEPS_PER_MODE`` per period of the fastest mode
-  (and at least two between history nodes). Over each step the modes move exactly
+  that matters (peak compliance ≥ ``RESOLVE_SHARE`` of the largest; and at least two
+  between history nodes). Over each step the modes move exactly
   (modal exponential, closed form), the cutting force of the step acts at its midpoint
   (second-order accurate, like the first-order semi-discretization's step).
 * The position one period back, x(t − T), is held at Chebyshev–Lobatto nodes over the
   previous active part (``p + 1`` of them, more the more mode periods the active part
   spans) and interpolated between them: the map's size is d + 2(p + 1) (d = twice the
-  number of modes), independent of the step, so fine steps stay cheap.
+  number of modes), independent of the step, so fine steps stay cheap. The steps between
+  two nodes are folded into one map of the modal state first, so the full state is
+  carried node to node. Up to ``MAX_NODES`` nodes (wide cuts at low speed; beyond, the
+  zero-order lobes, with a warning naming the speed).
+* The largest multiplier: all eigenvalues of a small map, a few Arnoldi steps on a large
+  one (its residual checked).
 * Everything that does not depend on the depth (propagators, kicks per unit depth) is
   computed once per batch of speeds and reused by every depth the search tries; a batch
   holds speeds whose node counts lie within ``GROUP_SPREAD`` of each other (the matrix
@@ -66,11 +72,13 @@ from taptune.machine.engagement import engagement_angles
 
 #: Steps per period of the fastest mode in the active part of a tooth period.
 STEPS_PER_MODE = 24
+#: Modes below this share of the largest peak compliance do not set the step (``_f_resolve``).
+RESOLVE_SHARE = 0.1
 #: History nodes: this many, plus NODES_PER_PERIOD per period of the fastest mode in the active part.
 MIN_NODES = 8
 NODES_PER_PERIOD = 4.0
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
-MAX_NODES = 32
+MAX_NODES = 128
 #: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
 #: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
 DEPTH_RTOL = 1e-2
@@ -93,6 +101,13 @@ PARALLEL_WORK = 2e5
 ISLAND_RATIO = 1.3
 #: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
+#: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
+#: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
+ARNOLDI_MIN = 40
+ARNOLDI_STEPS = 20
+ARNOLDI_TOL = 1e-7
+#: Speeds × steps of one monodromy evaluation at a time (bounds its temporary arrays).
+MONODROMY_BLOCK = 8192
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -181,8 +196,10 @@ class _Plan:
 
 
 def _lagrange(nodes, t) -> np.ndarray:
-    """Barycentric Lagrange interpolation rows (len(t), len(nodes))."""
-    w = np.array([1.0 / np.prod([nodes[j] - nodes[k] for k in range(len(nodes)) if k != j]) for j in range(len(nodes))])
+    """Barycentric Lagrange interpolation rows (len(t), len(nodes)) on Chebyshev–Lobatto
+    ``nodes`` (weights (−1)^j, halved at both ends: Berrut & Trefethen 2004, SIAM Rev. 46)."""
+    w = (-1.0) ** np.arange(len(nodes))
+    w[[0, -1]] *= 0.5
     d = t[:, None] - nodes[None, :]
     exact = np.isclose(d, 0.0, atol=1e-15)
     d = np.where(exact, 1.0, d)
@@ -204,6 +221,15 @@ def _plan(p: int, steps_between) -> _Plan:
     edges = np.array(edges)
     mid = 0.5 * (edges[1:] + edges[:-1])
     return _Plan(nodes, edges, np.array(node_step), _lagrange(nodes, mid))
+
+
+def _f_resolve(cols) -> float:
+    """The frequency the steps and history nodes resolve [Hz]: the fastest mode whose peak
+    compliance 1/(2ζk) is at least ``RESOLVE_SHARE`` of the most compliant one's (a faster,
+    stiffer mode still moves exactly between kicks; it only sees coarser kicks)."""
+    _, wn, z, k = cols
+    peak = 1.0 / (2 * z * k)
+    return float(wn[peak >= RESOLVE_SHARE * peak.max()].max() / (2 * np.pi))
 
 
 def _resolution(active_s, f_max: float, steps_per_mode: float | None, nodes: int | None):
@@ -260,40 +286,115 @@ def _steps(cols, geom, teeth, ktc, krc, tau, plan: _Plan) -> _Steps:
 def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     """Monodromy matrices of a batch at depths ``depth`` (b,) → (b, n, n).
 
-    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
+    State z = (q, v of every mode, x then y at the p + 1 nodes of the previous active part).
     Each step: exact free motion to its midpoint, the cutting impulse of the step, exact
     free motion on (to the next midpoint, or through the free flight to the period's end).
+    The steps between two history nodes are first folded into one map of the modal state
+    (and the delayed positions' impulses into one matrix), so the full state is carried
+    node to node, not step to step.
     """
-    _, b, nm, _ = steps.kq.shape
+    s, b, nm, _ = steps.kq.shape
+    rows = max(1, MONODROMY_BLOCK // s)
+    if b > rows:  # bounds the per-step matrices (s, b, 2M, 2M) in memory
+        a = np.asarray(depth, dtype=float)
+        return np.concatenate([_monodromy(steps.take(np.arange(i, min(i + rows, b))), a[i:i + rows], plan)
+                               for i in range(0, b, rows)])
     p1 = len(plan.nodes)
-    n = 2 * nm + 2 * p1
-    q = np.zeros((b, nm, n))
-    v = np.zeros((b, nm, n))
-    q[:, np.arange(nm), np.arange(nm)] = 1.0
-    v[:, np.arange(nm), nm + np.arange(nm)] = 1.0
-    a = np.asarray(depth, dtype=float)[None, :, None, None]
-    kq, kh = steps.kq * a, steps.kh * a
-    new_hist = np.zeros((b, p1, 2, n))
-    node_at = {int(s): j for j, s in enumerate(plan.node_step)}
-    new_hist[:, 0] = steps.sel_t @ q
-    q, v = _propagate(steps.first, q, v)
-    for i in range(kq.shape[0]):
-        dv = kq[i] @ q
-        dh = dv[:, :, 2 * nm:].reshape(b, nm, p1, 2)  # a view: the delayed x, y at the nodes
-        dh -= kh[i][:, :, None, :] * plan.interp[i][None, None, :, None]
-        v += dv
-        if i + 1 in node_at:
-            new_hist[:, node_at[i + 1]] = steps.sel_t @ (steps.to_edge[0][i] * q + steps.to_edge[1][i] * v)
-        q, v = _propagate(tuple(x[i] for x in steps.between), q, v)
-    return np.concatenate([q, v, new_hist.reshape(b, 2 * p1, n)], axis=1)
+    m2 = 2 * nm
+    n = m2 + 2 * p1
+    a = np.asarray(depth, dtype=float)[:, None, None]
+    ii = np.arange(nm)
+    kick = np.zeros((s, b, m2, m2))
+    kick[..., ii, ii] = 1.0
+    kick[..., nm + ii, nm + ii] = 1.0
+    kick[..., nm:, :nm] = steps.kq * a
+    prop = np.zeros((s, b, m2, m2))
+    for (r, c), e in zip(((0, 0), (0, nm), (nm, 0), (nm, nm)), steps.between):
+        prop[..., r + ii, c + ii] = e[..., 0]
+    src = -steps.kh * a  # velocity impulse per unit delayed x, y at each step, (s, b, M, 2)
+    # Backward through each node interval: w maps the state after kick i to the state after
+    # the interval's last kick; g_i = w · (impulse of step i).
+    ns = plan.node_step
+    length = np.diff(ns)
+    last = ns[1:] - 1
+    w = np.broadcast_to(np.eye(m2), (p1 - 1, b, m2, m2)).copy()
+    g = np.empty((s, b, m2, 2))
+    for t in range(int(length.max())):
+        live = np.flatnonzero(length > t)
+        i = last[live] - t
+        if t:
+            w[live] = w[live] @ (kick[i + 1] @ prop[i])
+        g[i] = w[live][..., nm:] @ src[i]
+    # State after an interval's last kick (the start, for the first) → after the next's last kick.
+    fold = w @ kick[ns[:-1]]
+    fold[1:] = fold[1:] @ prop[last[:-1]]
+    rec = np.empty((s, b, 2, m2))  # x, y at the step's end edge from the state after its kick
+    rec[..., :nm] = steps.sel_t[None, None] * steps.to_edge[0][..., 0][:, :, None, :]
+    rec[..., nm:] = steps.sel_t[None, None] * steps.to_edge[1][..., 0][:, :, None, :]
+    first = np.zeros((b, m2, m2))
+    for (r, c), e in zip(((0, 0), (0, nm), (nm, 0), (nm, nm)), steps.first):
+        first[:, r + ii, c + ii] = e[..., 0]
+    fold[0] = fold[0] @ first
+    z = np.zeros((b, m2, n))
+    z[:, ii, ii] = 1.0
+    z[:, nm + ii, nm + ii] = 1.0
+    hist = np.zeros((b, 2, p1, n))  # x, y at each node (the history block: direction-major)
+    hist[:, :, 0, :nm] = steps.sel_t
+    for c in range(p1 - 1):
+        lo, hi = ns[c], ns[c + 1]
+        z = fold[c] @ z
+        # Σ_i g_i ⊗ (interpolation row i): the delayed positions' impulses of the interval.
+        gc = np.moveaxis(g[lo:hi], 0, -1)  # (b, 2M, 2, q)
+        z[:, :, m2:] += (gc @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
+        hist[:, :, c + 1] = rec[hi - 1] @ z
+    z = prop[-1] @ z
+    return np.concatenate([z, hist.reshape(b, 2 * p1, n)], axis=1)
 
 
 def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
-    """(largest |μ|, that μ) of each monodromy matrix."""
-    mu = np.linalg.eigvals(phi)
+    """(largest |μ|, that μ) of each monodromy matrix: all eigenvalues of small matrices, the
+    dominant Ritz value of ``ARNOLDI_STEPS`` Arnoldi steps for large ones (the history's
+    multipliers crowd near zero, the few near the unit circle converge first); a Ritz value
+    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues."""
+    if phi.shape[-1] < ARNOLDI_MIN:
+        return _largest(np.linalg.eigvals(phi))
+    mu, res = _arnoldi(phi, ARNOLDI_STEPS)
+    bad = ~(res < ARNOLDI_TOL)
+    if bad.any():
+        mu[bad] = _largest(np.linalg.eigvals(phi[bad]))[1]
+    return np.abs(mu), mu
+
+
+def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
     i = np.argmax(np.abs(mu), axis=-1)
     top = np.take_along_axis(mu, i[..., None], -1)[..., 0]
     return np.abs(top), top
+
+
+def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Dominant Ritz value of ``m`` Arnoldi steps on each matrix (b, n, n) and its relative
+    residual |h_{m+1,m} y_m| / |μ| (Saad 2011, Numerical Methods for Large Eigenvalue
+    Problems, § 6.2); classical Gram–Schmidt done twice keeps the basis orthogonal."""
+    b, n, _ = phi.shape
+    m = min(m, n - 1)
+    basis = np.zeros((b, m + 1, n))
+    hess = np.zeros((b, m + 1, m))
+    start = np.random.default_rng(0).standard_normal(n)
+    basis[:, 0] = start / np.linalg.norm(start)
+    for j in range(m):
+        w = (phi @ basis[:, j, :, None])[..., 0]
+        for _ in range(2):
+            h = (basis[:, :j + 1] @ w[..., None])[..., 0]
+            w -= (h[:, None, :] @ basis[:, :j + 1])[:, 0]
+            hess[:, :j + 1, j] += h
+        norm = np.linalg.norm(w, axis=1)
+        hess[:, j + 1, j] = norm
+        basis[:, j + 1] = w / np.where(norm > 0, norm, 1.0)[:, None]
+    ritz, vec = np.linalg.eig(hess[:, :m])
+    i = np.argmax(np.abs(ritz), axis=-1)
+    mu = ritz[np.arange(b), i]
+    res = np.abs(hess[:, m, m - 1] * vec[np.arange(b), m - 1, i]) / np.maximum(np.abs(mu), 1e-300)
+    return mu, res
 
 
 def _check_teeth(teeth) -> None:
@@ -311,8 +412,7 @@ def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     a = np.atleast_1d(np.asarray(depth, dtype=float))
     tau = 60.0 / (rpm * teeth)
-    f_max = cols[1].max() / (2 * np.pi)
-    p, between = _resolution(geom[2] * tau, f_max, steps_per_mode, nodes)
+    p, between = _resolution(geom[2] * tau, _f_resolve(cols), steps_per_mode, nodes)
     plan = _plan(p, between)
     phi = _monodromy(_steps(cols, geom, teeth, ktc, krc, np.full(a.size, tau), plan), a, plan)
     return _critical(phi)
@@ -382,11 +482,12 @@ def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
     """Relative work per sampled speed: steps × rows × matrix size (0 where the ZOA takes over)."""
     cols = _modal(modes_x, modes_y)
     geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
-    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * cols[1].max() / (2 * np.pi)
+    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols)
     p = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
     n = 2 * len(cols[1]) + 2 * (p + 1)
     steps = np.maximum(2 * p, STEPS_PER_MODE * periods)
-    return np.where(p <= MAX_NODES, steps * n + n ** 3 / 20, 0.0)
+    eig = np.where(n < ARNOLDI_MIN, n ** 3 / 20, ARNOLDI_STEPS * n ** 2 / 4)
+    return np.where(p <= MAX_NODES, steps * n + eig, 0.0)
 
 
 def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
@@ -416,6 +517,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
+    f_res = _f_resolve(cols)
     lo, hi = float(speeds.min()), float(speeds.max())
     if hi / lo - 1 < 1e-9:
         samples, dense = np.array([lo]), np.array([False])
@@ -425,7 +527,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
             samples = np.unique(speeds)
             dense = np.zeros(samples.size, bool)
     tau = 60.0 / (teeth * samples)
-    periods = geom[2] * tau * f_max
+    periods = geom[2] * tau * f_res
     p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
     ok = p_need <= MAX_NODES
     warnings = []
@@ -443,7 +545,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     k_min = np.min(cols[3])
     fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
     start = np.where(np.isfinite(start) & (start > 0), start, fallback)
-    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap, pool)
+    run = (cols, geom, teeth, ktc, krc, f_res, depth_cap, pool)
     # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
     # tight first bracket: about half the evaluations).
     coarse = np.zeros(samples.size, bool)
