@@ -107,7 +107,7 @@ ARNOLDI_MIN = 40
 ARNOLDI_STEPS = 20
 ARNOLDI_TOL = 1e-7
 #: Speeds × steps of one monodromy evaluation at a time (bounds its temporary arrays).
-MONODROMY_BLOCK = 8192
+MONODROMY_BLOCK = 32768
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -557,13 +557,23 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     a_s[coarse], flip_s[coarse], chat_s[coarse] = _limits(run, tau[coarse], start[coarse], ok[coarse])
     rest = ~coarse
     known = coarse & ok & np.isfinite(a_s)
-    if rest.any():
+    screened, below = _screen_dense(run, samples, tau, dense & rest & ok, known, a_s, flip_s, chat_s)
+    rest &= ~screened
+    # Halfway between the searched ones first, then the rest: each from its nearer neighbours.
+    position = np.arange(samples.size)
+    for stride in (2, 1):
+        this = rest & (position % stride == 0)
+        if not this.any():
+            continue
         warm = known.sum() >= 2
-        guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
-        a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
+        guess = (np.interp(tau[this], tau[known][::-1], a_s[known][::-1]) if warm else start[this])
+        guess = np.where(np.isfinite(below[this]), below[this], guess)
+        a_s[this], flip_s[this], chat_s[this] = _limits(run, tau[this], guess, ok[this], warm=warm)
+        rest &= ~this
+        known |= this & ok & np.isfinite(a_s)
     island = guide is not None
     if island:
-        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok)
+        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok & ~screened)
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
     for _ in range(REFINE_ROUNDS):
@@ -593,6 +603,33 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
     return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
+
+
+def _screen_dense(run, samples, tau, cand, known, a_s, flip_s, chat_s):
+    """Where lobes are denser than the window a machinist can hold, the limit reported is the
+    lowest sample within ±DENSE_WINDOW; a sample stable at the highest computed limit within
+    twice that window cannot lower any window's lowest, so one evaluation there settles it:
+    it takes that limit (and its chatter kind). Returns (settled samples, the depth each
+    unsettled candidate chattered at: a start just above its limit; NaN elsewhere); fills
+    ``a_s``, ``flip_s``, ``chat_s`` of the settled ones in place."""
+    settled = np.zeros(samples.size, bool)
+    below = np.full(samples.size, np.nan)
+    idx = np.flatnonzero(cand)
+    ref = np.flatnonzero(known)
+    if idx.size == 0 or ref.size == 0:
+        return settled, below
+    lo = np.searchsorted(samples[ref], samples[idx] * (1 - 2 * DENSE_WINDOW), "left")
+    hi = np.searchsorted(samples[ref], samples[idx] * (1 + 2 * DENSE_WINDOW), "right")
+    top = np.array([ref[a + np.argmax(a_s[ref[a:b]])] if b > a else -1 for a, b in zip(lo, hi)])
+    idx, top = idx[top >= 0], top[top >= 0]
+    if idx.size == 0:
+        return settled, below
+    calm = _growth(run, tau[idx], a_s[top]) < 1.0
+    j, t = idx[calm], top[calm]
+    a_s[j], flip_s[j], chat_s[j] = a_s[t], flip_s[t], chat_s[t]
+    settled[j] = True
+    below[idx[~calm]] = a_s[top[~calm]]
+    return settled, below
 
 
 def _limits(run, tau, start, ok, warm: bool = False):
