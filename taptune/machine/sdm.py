@@ -103,7 +103,7 @@ ISLAND_RATIO = 1.3
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
 #: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
 #: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
-ARNOLDI_MIN = 40
+ARNOLDI_MIN = 32
 ARNOLDI_STEPS = 20
 ARNOLDI_TOL = 1e-7
 #: Speeds × steps of one monodromy evaluation at a time (bounds its temporary arrays).
@@ -559,18 +559,11 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     known = coarse & ok & np.isfinite(a_s)
     screened, below = _screen_dense(run, samples, tau, dense & rest & ok, known, a_s, flip_s, chat_s)
     rest &= ~screened
-    # Halfway between the searched ones first, then the rest: each from its nearer neighbours.
-    position = np.arange(samples.size)
-    for stride in (2, 1):
-        this = rest & (position % stride == 0)
-        if not this.any():
-            continue
+    if rest.any():
         warm = known.sum() >= 2
-        guess = (np.interp(tau[this], tau[known][::-1], a_s[known][::-1]) if warm else start[this])
-        guess = np.where(np.isfinite(below[this]), below[this], guess)
-        a_s[this], flip_s[this], chat_s[this] = _limits(run, tau[this], guess, ok[this], warm=warm)
-        rest &= ~this
-        known |= this & ok & np.isfinite(a_s)
+        guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
+        guess = np.where(np.isfinite(below[rest]), below[rest], guess)
+        a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
     island = guide is not None
     if island:
         _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok & ~screened)
