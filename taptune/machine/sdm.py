@@ -390,10 +390,18 @@ def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
         norm = np.linalg.norm(w, axis=1)
         hess[:, j + 1, j] = norm
         basis[:, j + 1] = w / np.where(norm > 0, norm, 1.0)[:, None]
-    ritz, vec = np.linalg.eig(hess[:, :m])
-    i = np.argmax(np.abs(ritz), axis=-1)
-    mu = ritz[np.arange(b), i]
-    res = np.abs(hess[:, m, m - 1] * vec[np.arange(b), m - 1, i]) / np.maximum(np.abs(mu), 1e-300)
+    small = hess[:, :m]
+    ritz = np.linalg.eigvals(small)
+    mu = ritz[np.arange(b), np.argmax(np.abs(ritz), axis=-1)]
+    # Its Ritz vector by one step of inverse iteration (cheaper than all eigenvectors).
+    try:
+        y = np.linalg.solve(small - (mu * (1 + 1e-10))[:, None, None] * np.eye(m), np.ones((b, m, 1), complex))[..., 0]
+        y /= np.linalg.norm(y, axis=1, keepdims=True)
+    except np.linalg.LinAlgError:
+        ritz, vec = np.linalg.eig(small)
+        i = np.argmax(np.abs(ritz), axis=-1)
+        mu, y = ritz[np.arange(b), i], vec[np.arange(b), :, i]
+    res = np.abs(hess[:, m, m - 1] * y[:, m - 1]) / np.maximum(np.abs(mu), 1e-300)
     return mu, res
 
 
