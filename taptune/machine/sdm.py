@@ -95,6 +95,8 @@ COARSE = 4
 REFINE_ROUNDS = 2
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
+#: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
+AUTO_BUDGET = 1.0e7
 #: Work (relative units of :func:`_cost`) above which the speeds are shared between processes.
 PARALLEL_WORK = 2e5
 #: Limits above this multiple of the guide (zero-order or neighbours' limit) are checked for an island below.
@@ -106,8 +108,6 @@ ISLAND_LEVELS = (0.55, 0.75, 1.0)
 ARNOLDI_MIN = 32
 ARNOLDI_STEPS = 20
 ARNOLDI_TOL = 1e-7
-#: Speeds × steps of one monodromy evaluation at a time (bounds its temporary arrays).
-MONODROMY_BLOCK = 32768
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -294,24 +294,24 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     node to node, not step to step.
     """
     s, b, nm, _ = steps.kq.shape
-    rows = max(1, MONODROMY_BLOCK // s)
-    if b > rows:  # bounds the per-step matrices (s, b, 2M, 2M) in memory
-        a = np.asarray(depth, dtype=float)
-        return np.concatenate([_monodromy(steps.take(np.arange(i, min(i + rows, b))), a[i:i + rows], plan)
-                               for i in range(0, b, rows)])
     p1 = len(plan.nodes)
     m2 = 2 * nm
     n = m2 + 2 * p1
     a = np.asarray(depth, dtype=float)[:, None, None]
     ii = np.arange(nm)
-    kick = np.zeros((s, b, m2, m2))
-    kick[..., ii, ii] = 1.0
-    kick[..., nm + ii, nm + ii] = 1.0
-    kick[..., nm:, :nm] = steps.kq * a
-    prop = np.zeros((s, b, m2, m2))
-    for (r, c), e in zip(((0, 0), (0, nm), (nm, 0), (nm, nm)), steps.between):
-        prop[..., r + ii, c + ii] = e[..., 0]
-    src = -steps.kh * a  # velocity impulse per unit delayed x, y at each step, (s, b, M, 2)
+    akq = steps.kq * a  # velocity kick per modal displacement, (s, b, M, M)
+    src = -steps.kh * a  # … per delayed x, y, (s, b, M, 2)
+    e00, e01, e10, e11 = (x[..., 0][..., None, :] for x in steps.between)  # row scalings, (s, b, 1, M)
+
+    def after_kick(m, i):
+        """m · kick_i for maps m (…, 2M, 2M), as (m_q + m_v · a K_i, m_v)."""
+        return np.concatenate([m[..., :nm] + m[..., nm:] @ akq[i], m[..., nm:]], axis=-1)
+
+    def after_prop(m, f00, f01, f10, f11):
+        """m · (free motion with coefficients f..) for maps m (…, 2M, 2M)."""
+        mq, mv = m[..., :nm], m[..., nm:]
+        return np.concatenate([mq * f00 + mv * f10, mq * f01 + mv * f11], axis=-1)
+
     # Backward through each node interval: w maps the state after kick i to the state after
     # the interval's last kick; g_i = w · (impulse of step i).
     ns = plan.node_step
@@ -323,32 +323,28 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
         live = np.flatnonzero(length > t)
         i = last[live] - t
         if t:
-            w[live] = w[live] @ (kick[i + 1] @ prop[i])
+            w[live] = after_prop(after_kick(w[live], i + 1), e00[i], e01[i], e10[i], e11[i])
         g[i] = w[live][..., nm:] @ src[i]
     # State after an interval's last kick (the start, for the first) → after the next's last kick.
-    fold = w @ kick[ns[:-1]]
-    fold[1:] = fold[1:] @ prop[last[:-1]]
-    rec = np.empty((s, b, 2, m2))  # x, y at the step's end edge from the state after its kick
-    rec[..., :nm] = steps.sel_t[None, None] * steps.to_edge[0][..., 0][:, :, None, :]
-    rec[..., nm:] = steps.sel_t[None, None] * steps.to_edge[1][..., 0][:, :, None, :]
-    first = np.zeros((b, m2, m2))
-    for (r, c), e in zip(((0, 0), (0, nm), (nm, 0), (nm, nm)), steps.first):
-        first[:, r + ii, c + ii] = e[..., 0]
-    fold[0] = fold[0] @ first
+    fold = after_kick(w, ns[:-1])
+    j = last[:-1]
+    fold[1:] = after_prop(fold[1:], e00[j], e01[j], e10[j], e11[j])
+    fold[0] = after_prop(fold[0], *(x[..., 0][:, None, :] for x in steps.first))
     z = np.zeros((b, m2, n))
     z[:, ii, ii] = 1.0
     z[:, nm + ii, nm + ii] = 1.0
     hist = np.zeros((b, 2, p1, n))  # x, y at each node (the history block: direction-major)
     hist[:, :, 0, :nm] = steps.sel_t
+    te0, te1 = steps.to_edge
     for c in range(p1 - 1):
         lo, hi = ns[c], ns[c + 1]
         z = fold[c] @ z
         # Σ_i g_i ⊗ (interpolation row i): the delayed positions' impulses of the interval.
         gc = np.moveaxis(g[lo:hi], 0, -1)  # (b, 2M, 2, q)
         z[:, :, m2:] += (gc @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
-        hist[:, :, c + 1] = rec[hi - 1] @ z
-    z = prop[-1] @ z
-    return np.concatenate([z, hist.reshape(b, 2 * p1, n)], axis=1)
+        hist[:, :, c + 1] = steps.sel_t @ (te0[hi - 1] * z[:, :nm] + te1[hi - 1] * z[:, nm:])
+    q, v = _propagate(tuple(x[-1] for x in steps.between), z[:, :nm], z[:, nm:].copy())
+    return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
 
 
 def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
@@ -445,7 +441,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tu
 
 
 def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
-              rpm, depth_cap: float = np.inf, guide=None, workers: int = 2) -> SdmLobes:
+              rpm, depth_cap: float = np.inf, guide=None, workers: int = 2, budget: float | None = None) -> SdmLobes:
     """Semi-discretization lobes on the speed grid ``rpm`` (module docstring).
 
     Parameters
@@ -465,6 +461,10 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     workers : int
         Processes to share the speeds between (forked; 1: this process only). Used only
         when the work is large enough to pay for the start.
+    budget : float, optional
+        Work (units of :func:`_cost`; ``AUTO_BUDGET`` ≈ 3 s of one core) the speeds may take,
+        from the fastest down; slower speeds are left to the zero-order lobes with a warning
+        naming the speed. None: every speed up to ``MAX_NODES`` history nodes.
 
     Returns
     -------
@@ -477,17 +477,19 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     if not (ktc > 0 and krc >= 0):
         raise InputError("K_tc must be > 0 and K_rc >= 0")
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
-    if not _worth_processes(modes_x, modes_y, speeds, cut, workers):
-        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, **cut)
+    budget = np.inf if budget is None else float(budget)
+    if not _worth_processes(modes_x, modes_y, speeds, cut, workers, budget):
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, budget=budget, **cut)
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, **cut)
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, budget=budget, **cut)
 
 
 def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
-    """Relative work per sampled speed: steps × rows × matrix size (0 where the ZOA takes over)."""
+    """Relative work per sampled speed: steps × modal rows × matrix size, plus the multiplier's
+    (0 where the ZOA takes over)."""
     cols = _modal(modes_x, modes_y)
     geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
     periods = geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols)
@@ -495,10 +497,10 @@ def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
     n = 2 * len(cols[1]) + 2 * (p + 1)
     steps = np.maximum(2 * p, STEPS_PER_MODE * periods)
     eig = np.where(n < ARNOLDI_MIN, n ** 3 / 20, ARNOLDI_STEPS * n ** 2 / 4)
-    return np.where(p <= MAX_NODES, steps * n + eig, 0.0)
+    return np.where(p <= MAX_NODES, steps * n * (len(cols[1]) / 6) ** 2 + eig, 0.0)
 
 
-def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
+def _worth_processes(modes_x, modes_y, speeds, cut, workers, budget) -> bool:
     """Whether the batches of speeds go to ``workers`` forked processes: only from the main
     thread (a fork from a thread of the app could copy a lock another thread holds) of a
     process that may have children, and only when the work pays for their start (~0.1 s)."""
@@ -515,10 +517,11 @@ def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
     if multiprocessing.current_process().daemon:
         return False
     samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
-    return float(np.sum(_cost(modes_x, modes_y, samples, cut))) >= PARALLEL_WORK
+    return min(float(np.sum(_cost(modes_x, modes_y, samples, cut))), budget) >= PARALLEL_WORK
 
 
-def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool) -> SdmLobes:
+def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool,
+               budget=np.inf) -> SdmLobes:
     """:func:`sdm_lobes` (``rpm`` checked); the batches of each phase go to ``pool`` if given
     (every speed's search is independent of its batch, so the result is the same)."""
     speeds = np.asarray(rpm, dtype=float)
@@ -539,7 +542,14 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
     ok = p_need <= MAX_NODES
     warnings = []
-    if not ok.all():
+    cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling)
+    work = np.cumsum(_cost(modes_x, modes_y, samples, cut)[::-1])[::-1]  # from the fastest down
+    over = ok & (work > budget)
+    if over.any():
+        ok &= ~over
+        warnings.append(f"below {samples[over].max():.0f} rpm the semi-discretization would take more than a few "
+                        "seconds (`--method sdm` computes it); the zero-order lobes are used there")
+    elif not ok.all():
         slow = samples[~ok]
         warnings.append(f"below {slow.max():.0f} rpm the cut spans too many vibration periods for the "
                         f"semi-discretization's history ({MAX_NODES} nodes); the zero-order lobes are used there")

@@ -112,3 +112,14 @@ def test_the_largest_multiplier_of_a_large_map_is_that_of_all_eigenvalues():
     top = every[np.arange(depth.size), np.argmax(np.abs(every), axis=1)]
     assert rho == pytest.approx(np.abs(top), rel=1e-7)
     assert np.all(np.abs(np.abs(mu.imag) - np.abs(top.imag)) < 1e-6)
+
+
+def test_auto_keeps_to_its_time_budget_and_says_below_which_speed():
+    """`auto` leaves the slowest speeds of a costly job to the zero-order lobes, with a warning
+    naming the speed; `sdm` (no budget) computes them."""
+    cut = dict(teeth=2, ktc=902e6, krc=243e6, diameter=20 * MM, ae=20 * MM, milling="down")
+    rpm = np.array([5000.0, 24000.0])
+    tight = sdm_lobes(END_MILL_X, END_MILL_Y, rpm=rpm, budget=1.0, **cut)
+    assert np.isnan(tight.a_lim[0]) and "below" in tight.warnings[0] and "--method sdm" in tight.warnings[0]
+    free = sdm_lobes(END_MILL_X, END_MILL_Y, rpm=np.array([5000.0]), **cut)
+    assert np.isfinite(free.a_lim[0]) and not free.warnings
