@@ -56,6 +56,10 @@ def _load_before(rev: str):
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod  # dataclasses look their module up
     spec.loader.exec_module(mod)
+    if not hasattr(mod, "AUTO_BUDGET"):  # before the time budget of method="auto"
+        plain = mod.sdm_lobes
+        mod.AUTO_BUDGET = None
+        mod.sdm_lobes = lambda *a, budget=None, **k: plain(*a, **k)
     return mod
 
 

@@ -51,12 +51,16 @@ fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in rela
 (flip lobes are narrow), and interpolated onto
 the requested grid (linear in the tooth period). Where lobes are narrower than the speed
 window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
-``REL_SPACING_DENSE`` and the limit reported is the lowest over that window.
+``REL_SPACING_DENSE`` and the limit reported is the lowest over that window; there a
+sample that is stable at the highest limit computed nearby cannot lower that lowest and
+is settled by that one evaluation. ``budget`` bounds the work (:func:`_cost`) from the
+fastest speed down (``AUTO_BUDGET`` for ``method="auto"``); slower speeds are left to
+the zero-order lobes with a warning naming the speed.
 
 Signatures::
 
     sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
-              depth_cap=inf, guide=None, workers=2) -> SdmLobes
+              depth_cap=inf, guide=None, workers=2, budget=None) -> SdmLobes
     sdm_growth(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
                steps_per_mode=None, nodes=None) -> (|μ|max, μ)     # one speed, many depths
 """
