@@ -2,7 +2,8 @@
 
 * SDM: a 2-direction tool point with 3 modes each (near 3, 4.3 and 6 kHz), 4 teeth,
   Ø20 mm, a/D = 0.05 down-milling, 500–24,000 rpm on a 10 rpm grid
-  (:func:`taptune.machine.stability_lobes` with ``method="sdm"``, the modes given).
+  (:func:`taptune.machine.stability_lobes` with ``method="sdm"``, the modes given), then
+  ``method="auto"`` (the SDM within its time budget, the zero-order lobes below).
 * Band: 64 sampled tool points (±2 % on the modal frequencies) → safe depth per speed and
   safe pockets, from the central lobes (:func:`taptune.machine.band.lobe_band`).
 * Machine view: one stick-out move of the view's preview (FRF + zero-order lobes +
@@ -70,6 +71,10 @@ def main() -> None:
                                                      **cut), args.repeat)
     print(f"SDM, 3+3 modes, {ext.size} speeds {ext[0]:g}–{ext[-1]:g} rpm: {cpu:.2f} s CPU, {wall:.2f} s wall "
           f"(method {lobes.method}; {len(lobes.warnings)} warning(s){': ' + lobes.warnings[0] if lobes.warnings else ''})")
+    cpu_a, wall_a, auto = timed(lambda: stability_lobes(f, x.frf(f), y.frf(f), rpm=ext, method="auto", modes=(x, y),
+                                                        **cut), args.repeat)
+    print(f"auto (SDM within its time budget), same grid: {cpu_a:.2f} s CPU, {wall_a:.2f} s wall"
+          f"{': ' + auto.warnings[-1] if auto.warnings else ''}")
     cpu, wall, band = timed(lambda: lobe_band(ext, lobes.a_lim, inner, scales, 0.9), args.repeat)
     print(f"band, {band.samples} sampled tool points, {rpm.size} speeds: {cpu:.3f} s CPU, {wall:.3f} s wall; "
           f"{len(band.safe_pockets)} safe pockets")

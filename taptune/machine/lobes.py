@@ -503,7 +503,8 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
         the semi-discretization of :mod:`taptune.machine.sdm` on modes fitted to the FRFs
         (flip and Hopf lobes of intermittent cuts; InputError when the modes cannot
         reproduce an FRF); "auto": SDM, or the ZOA with a warning when no modal fit
-        reproduces the FRFs. Even slotting with two teeth differs by ≈ 10 % between
+        reproduces the FRFs, and at the lowest speeds when the SDM would take more than
+        a few seconds there (``AUTO_BUDGET``; a warning names the speed). Even slotting with two teeth differs by ≈ 10 % between
         the two, so "auto" never takes the average on trust.
     depth_cap : float
         Largest depth the tool can cut [m] (its flute length); :meth:`Lobes.to_dict`
@@ -528,7 +529,7 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
     zoa = replace(zoa, depth_cap=float(depth_cap))
     if method == "zoa":
         return zoa
-    from taptune.machine.sdm import sdm_lobes
+    from taptune.machine.sdm import AUTO_BUDGET, sdm_lobes
 
     if modes is None:
         f = np.asarray(freq_hz, dtype=float)
@@ -549,7 +550,7 @@ def stability_lobes(freq_hz, phi_xx, phi_yy=None, *, teeth: int, ktc: float, krc
         return np.interp(r, zoa.rpm[order], np.where(np.isfinite(zoa.a_lim), zoa.a_lim, zoa.a_crit)[order])
 
     s = sdm_lobes(mx, my, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, rpm=speeds,
-                  depth_cap=depth_cap, guide=guide)
+                  depth_cap=depth_cap, guide=guide, budget=None if method == "sdm" else AUTO_BUDGET)
     gap = np.isnan(s.a_lim)  # speeds left to the zero-order lobes
     a = np.where(gap, zoa.a_lim, s.a_lim)
     chatter = np.where(gap, zoa.chatter_hz, s.chatter_hz)

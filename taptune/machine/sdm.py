@@ -21,13 +21,19 @@ The discretisation:
 * The period splits into the active part, where some tooth cuts, and the free flight;
   the free flight is one exact modal exponential, whatever its length.
 * The active part is cut into steps, ``STEPS_PER_MODE`` per period of the fastest mode
-  (and at least two between history nodes). Over each step the modes move exactly
+  that matters (peak compliance ≥ ``RESOLVE_SHARE`` of the largest; and at least two
+  between history nodes). Over each step the modes move exactly
   (modal exponential, closed form), the cutting force of the step acts at its midpoint
   (second-order accurate, like the first-order semi-discretization's step).
 * The position one period back, x(t − T), is held at Chebyshev–Lobatto nodes over the
   previous active part (``p + 1`` of them, more the more mode periods the active part
   spans) and interpolated between them: the map's size is d + 2(p + 1) (d = twice the
-  number of modes), independent of the step, so fine steps stay cheap.
+  number of modes), independent of the step, so fine steps stay cheap. The steps between
+  two nodes are folded into one map of the modal state first, so the full state is
+  carried node to node. Up to ``MAX_NODES`` nodes (wide cuts at low speed; beyond, the
+  zero-order lobes, with a warning naming the speed).
+* The largest multiplier: all eigenvalues of a small map, a few Arnoldi steps on a large
+  one (its residual checked).
 * Everything that does not depend on the depth (propagators, kicks per unit depth) is
   computed once per batch of speeds and reused by every depth the search tries; a batch
   holds speeds whose node counts lie within ``GROUP_SPREAD`` of each other (the matrix
@@ -45,12 +51,16 @@ fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in rela
 (flip lobes are narrow), and interpolated onto
 the requested grid (linear in the tooth period). Where lobes are narrower than the speed
 window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
-``REL_SPACING_DENSE`` and the limit reported is the lowest over that window.
+``REL_SPACING_DENSE`` and the limit reported is the lowest over that window; there a
+sample that is stable at the highest limit computed nearby cannot lower that lowest and
+is settled by that one evaluation. ``budget`` bounds the work (:func:`_cost`) from the
+fastest speed down (``AUTO_BUDGET`` for ``method="auto"``); slower speeds are left to
+the zero-order lobes with a warning naming the speed.
 
 Signatures::
 
     sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
-              depth_cap=inf, guide=None, workers=2) -> SdmLobes
+              depth_cap=inf, guide=None, workers=2, budget=None) -> SdmLobes
     sdm_growth(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth,
                steps_per_mode=None, nodes=None) -> (|μ|max, μ)     # one speed, many depths
 """
@@ -66,11 +76,13 @@ from taptune.machine.engagement import engagement_angles
 
 #: Steps per period of the fastest mode in the active part of a tooth period.
 STEPS_PER_MODE = 24
+#: Modes below this share of the largest peak compliance do not set the step (``_f_resolve``).
+RESOLVE_SHARE = 0.1
 #: History nodes: this many, plus NODES_PER_PERIOD per period of the fastest mode in the active part.
 MIN_NODES = 8
 NODES_PER_PERIOD = 4.0
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
-MAX_NODES = 32
+MAX_NODES = 128
 #: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
 #: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
 DEPTH_RTOL = 1e-2
@@ -87,12 +99,19 @@ COARSE = 4
 REFINE_ROUNDS = 2
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
+#: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
+AUTO_BUDGET = 1.0e7
 #: Work (relative units of :func:`_cost`) above which the speeds are shared between processes.
 PARALLEL_WORK = 2e5
 #: Limits above this multiple of the guide (zero-order or neighbours' limit) are checked for an island below.
 ISLAND_RATIO = 1.3
 #: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
+#: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
+#: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
+ARNOLDI_MIN = 32
+ARNOLDI_STEPS = 20
+ARNOLDI_TOL = 1e-7
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
 
@@ -181,8 +200,10 @@ class _Plan:
 
 
 def _lagrange(nodes, t) -> np.ndarray:
-    """Barycentric Lagrange interpolation rows (len(t), len(nodes))."""
-    w = np.array([1.0 / np.prod([nodes[j] - nodes[k] for k in range(len(nodes)) if k != j]) for j in range(len(nodes))])
+    """Barycentric Lagrange interpolation rows (len(t), len(nodes)) on Chebyshev–Lobatto
+    ``nodes`` (weights (−1)^j, halved at both ends: Berrut & Trefethen 2004, SIAM Rev. 46)."""
+    w = (-1.0) ** np.arange(len(nodes))
+    w[[0, -1]] *= 0.5
     d = t[:, None] - nodes[None, :]
     exact = np.isclose(d, 0.0, atol=1e-15)
     d = np.where(exact, 1.0, d)
@@ -204,6 +225,15 @@ def _plan(p: int, steps_between) -> _Plan:
     edges = np.array(edges)
     mid = 0.5 * (edges[1:] + edges[:-1])
     return _Plan(nodes, edges, np.array(node_step), _lagrange(nodes, mid))
+
+
+def _f_resolve(cols) -> float:
+    """The frequency the steps and history nodes resolve [Hz]: the fastest mode whose peak
+    compliance 1/(2ζk) is at least ``RESOLVE_SHARE`` of the most compliant one's (a faster,
+    stiffer mode still moves exactly between kicks; it only sees coarser kicks)."""
+    _, wn, z, k = cols
+    peak = 1.0 / (2 * z * k)
+    return float(wn[peak >= RESOLVE_SHARE * peak.max()].max() / (2 * np.pi))
 
 
 def _resolution(active_s, f_max: float, steps_per_mode: float | None, nodes: int | None):
@@ -260,40 +290,119 @@ def _steps(cols, geom, teeth, ktc, krc, tau, plan: _Plan) -> _Steps:
 def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     """Monodromy matrices of a batch at depths ``depth`` (b,) → (b, n, n).
 
-    State z = (q, v of every mode, x and y at the p + 1 nodes of the previous active part).
+    State z = (q, v of every mode, x then y at the p + 1 nodes of the previous active part).
     Each step: exact free motion to its midpoint, the cutting impulse of the step, exact
     free motion on (to the next midpoint, or through the free flight to the period's end).
+    The steps between two history nodes are first folded into one map of the modal state
+    (and the delayed positions' impulses into one matrix), so the full state is carried
+    node to node, not step to step.
     """
-    _, b, nm, _ = steps.kq.shape
+    s, b, nm, _ = steps.kq.shape
     p1 = len(plan.nodes)
-    n = 2 * nm + 2 * p1
-    q = np.zeros((b, nm, n))
-    v = np.zeros((b, nm, n))
-    q[:, np.arange(nm), np.arange(nm)] = 1.0
-    v[:, np.arange(nm), nm + np.arange(nm)] = 1.0
-    a = np.asarray(depth, dtype=float)[None, :, None, None]
-    kq, kh = steps.kq * a, steps.kh * a
-    new_hist = np.zeros((b, p1, 2, n))
-    node_at = {int(s): j for j, s in enumerate(plan.node_step)}
-    new_hist[:, 0] = steps.sel_t @ q
-    q, v = _propagate(steps.first, q, v)
-    for i in range(kq.shape[0]):
-        dv = kq[i] @ q
-        dh = dv[:, :, 2 * nm:].reshape(b, nm, p1, 2)  # a view: the delayed x, y at the nodes
-        dh -= kh[i][:, :, None, :] * plan.interp[i][None, None, :, None]
-        v += dv
-        if i + 1 in node_at:
-            new_hist[:, node_at[i + 1]] = steps.sel_t @ (steps.to_edge[0][i] * q + steps.to_edge[1][i] * v)
-        q, v = _propagate(tuple(x[i] for x in steps.between), q, v)
-    return np.concatenate([q, v, new_hist.reshape(b, 2 * p1, n)], axis=1)
+    m2 = 2 * nm
+    n = m2 + 2 * p1
+    a = np.asarray(depth, dtype=float)[:, None, None]
+    ii = np.arange(nm)
+    akq = steps.kq * a  # velocity kick per modal displacement, (s, b, M, M)
+    src = -steps.kh * a  # … per delayed x, y, (s, b, M, 2)
+    e00, e01, e10, e11 = (x[..., 0][..., None, :] for x in steps.between)  # row scalings, (s, b, 1, M)
+
+    def after_kick(m, i):
+        """m · kick_i for maps m (…, 2M, 2M), as (m_q + m_v · a K_i, m_v)."""
+        return np.concatenate([m[..., :nm] + m[..., nm:] @ akq[i], m[..., nm:]], axis=-1)
+
+    def after_prop(m, f00, f01, f10, f11):
+        """m · (free motion with coefficients f..) for maps m (…, 2M, 2M)."""
+        mq, mv = m[..., :nm], m[..., nm:]
+        return np.concatenate([mq * f00 + mv * f10, mq * f01 + mv * f11], axis=-1)
+
+    # Backward through each node interval: w maps the state after kick i to the state after
+    # the interval's last kick; g_i = w · (impulse of step i).
+    ns = plan.node_step
+    length = np.diff(ns)
+    last = ns[1:] - 1
+    w = np.broadcast_to(np.eye(m2), (p1 - 1, b, m2, m2)).copy()
+    g = np.empty((s, b, m2, 2))
+    for t in range(int(length.max())):
+        live = np.flatnonzero(length > t)
+        i = last[live] - t
+        if t:
+            w[live] = after_prop(after_kick(w[live], i + 1), e00[i], e01[i], e10[i], e11[i])
+        g[i] = w[live][..., nm:] @ src[i]
+    # State after an interval's last kick (the start, for the first) → after the next's last kick.
+    fold = after_kick(w, ns[:-1])
+    j = last[:-1]
+    fold[1:] = after_prop(fold[1:], e00[j], e01[j], e10[j], e11[j])
+    fold[0] = after_prop(fold[0], *(x[..., 0][:, None, :] for x in steps.first))
+    z = np.zeros((b, m2, n))
+    z[:, ii, ii] = 1.0
+    z[:, nm + ii, nm + ii] = 1.0
+    hist = np.zeros((b, 2, p1, n))  # x, y at each node (the history block: direction-major)
+    hist[:, :, 0, :nm] = steps.sel_t
+    te0, te1 = steps.to_edge
+    for c in range(p1 - 1):
+        lo, hi = ns[c], ns[c + 1]
+        z = fold[c] @ z
+        # Σ_i g_i ⊗ (interpolation row i): the delayed positions' impulses of the interval.
+        gc = np.moveaxis(g[lo:hi], 0, -1)  # (b, 2M, 2, q)
+        z[:, :, m2:] += (gc @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
+        hist[:, :, c + 1] = steps.sel_t @ (te0[hi - 1] * z[:, :nm] + te1[hi - 1] * z[:, nm:])
+    q, v = _propagate(tuple(x[-1] for x in steps.between), z[:, :nm], z[:, nm:].copy())
+    return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
 
 
 def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
-    """(largest |μ|, that μ) of each monodromy matrix."""
-    mu = np.linalg.eigvals(phi)
+    """(largest |μ|, that μ) of each monodromy matrix: all eigenvalues of small matrices, the
+    dominant Ritz value of ``ARNOLDI_STEPS`` Arnoldi steps for large ones (the history's
+    multipliers crowd near zero, the few near the unit circle converge first); a Ritz value
+    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues."""
+    if phi.shape[-1] < ARNOLDI_MIN:
+        return _largest(np.linalg.eigvals(phi))
+    mu, res = _arnoldi(phi, ARNOLDI_STEPS)
+    bad = ~(res < ARNOLDI_TOL)
+    if bad.any():
+        mu[bad] = _largest(np.linalg.eigvals(phi[bad]))[1]
+    return np.abs(mu), mu
+
+
+def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
     i = np.argmax(np.abs(mu), axis=-1)
     top = np.take_along_axis(mu, i[..., None], -1)[..., 0]
     return np.abs(top), top
+
+
+def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Dominant Ritz value of ``m`` Arnoldi steps on each matrix (b, n, n) and its relative
+    residual |h_{m+1,m} y_m| / |μ| (Saad 2011, Numerical Methods for Large Eigenvalue
+    Problems, § 6.2); classical Gram–Schmidt done twice keeps the basis orthogonal."""
+    b, n, _ = phi.shape
+    m = min(m, n - 1)
+    basis = np.zeros((b, m + 1, n))
+    hess = np.zeros((b, m + 1, m))
+    start = np.random.default_rng(0).standard_normal(n)
+    basis[:, 0] = start / np.linalg.norm(start)
+    for j in range(m):
+        w = (phi @ basis[:, j, :, None])[..., 0]
+        for _ in range(2):
+            h = (basis[:, :j + 1] @ w[..., None])[..., 0]
+            w -= (h[:, None, :] @ basis[:, :j + 1])[:, 0]
+            hess[:, :j + 1, j] += h
+        norm = np.linalg.norm(w, axis=1)
+        hess[:, j + 1, j] = norm
+        basis[:, j + 1] = w / np.where(norm > 0, norm, 1.0)[:, None]
+    small = hess[:, :m]
+    ritz = np.linalg.eigvals(small)
+    mu = ritz[np.arange(b), np.argmax(np.abs(ritz), axis=-1)]
+    # Its Ritz vector by one step of inverse iteration (cheaper than all eigenvectors).
+    try:
+        y = np.linalg.solve(small - (mu * (1 + 1e-10))[:, None, None] * np.eye(m), np.ones((b, m, 1), complex))[..., 0]
+        y /= np.linalg.norm(y, axis=1, keepdims=True)
+    except np.linalg.LinAlgError:
+        ritz, vec = np.linalg.eig(small)
+        i = np.argmax(np.abs(ritz), axis=-1)
+        mu, y = ritz[np.arange(b), i], vec[np.arange(b), :, i]
+    res = np.abs(hess[:, m, m - 1] * y[:, m - 1]) / np.maximum(np.abs(mu), 1e-300)
+    return mu, res
 
 
 def _check_teeth(teeth) -> None:
@@ -311,8 +420,7 @@ def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     a = np.atleast_1d(np.asarray(depth, dtype=float))
     tau = 60.0 / (rpm * teeth)
-    f_max = cols[1].max() / (2 * np.pi)
-    p, between = _resolution(geom[2] * tau, f_max, steps_per_mode, nodes)
+    p, between = _resolution(geom[2] * tau, _f_resolve(cols), steps_per_mode, nodes)
     plan = _plan(p, between)
     phi = _monodromy(_steps(cols, geom, teeth, ktc, krc, np.full(a.size, tau), plan), a, plan)
     return _critical(phi)
@@ -337,7 +445,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tu
 
 
 def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float, milling: str,
-              rpm, depth_cap: float = np.inf, guide=None, workers: int = 2) -> SdmLobes:
+              rpm, depth_cap: float = np.inf, guide=None, workers: int = 2, budget: float | None = None) -> SdmLobes:
     """Semi-discretization lobes on the speed grid ``rpm`` (module docstring).
 
     Parameters
@@ -357,6 +465,10 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     workers : int
         Processes to share the speeds between (forked; 1: this process only). Used only
         when the work is large enough to pay for the start.
+    budget : float, optional
+        Work (units of :func:`_cost`; ``AUTO_BUDGET`` ≈ 3 s of one core) the speeds may take,
+        from the fastest down; slower speeds are left to the zero-order lobes with a warning
+        naming the speed. None: every speed up to ``MAX_NODES`` history nodes.
 
     Returns
     -------
@@ -369,27 +481,30 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     if not (ktc > 0 and krc >= 0):
         raise InputError("K_tc must be > 0 and K_rc >= 0")
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
-    if not _worth_processes(modes_x, modes_y, speeds, cut, workers):
-        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, **cut)
+    budget = np.inf if budget is None else float(budget)
+    if not _worth_processes(modes_x, modes_y, speeds, cut, workers, budget):
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, budget=budget, **cut)
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, **cut)
+        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, budget=budget, **cut)
 
 
 def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
-    """Relative work per sampled speed: steps × rows × matrix size (0 where the ZOA takes over)."""
+    """Relative work per sampled speed: steps × modal rows × matrix size, plus the multiplier's
+    (0 where the ZOA takes over)."""
     cols = _modal(modes_x, modes_y)
     geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
-    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * cols[1].max() / (2 * np.pi)
+    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols)
     p = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
     n = 2 * len(cols[1]) + 2 * (p + 1)
     steps = np.maximum(2 * p, STEPS_PER_MODE * periods)
-    return np.where(p <= MAX_NODES, steps * n + n ** 3 / 20, 0.0)
+    eig = np.where(n < ARNOLDI_MIN, n ** 3 / 20, ARNOLDI_STEPS * n ** 2 / 4)
+    return np.where(p <= MAX_NODES, steps * n * (len(cols[1]) / 6) ** 2 + eig, 0.0)
 
 
-def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
+def _worth_processes(modes_x, modes_y, speeds, cut, workers, budget) -> bool:
     """Whether the batches of speeds go to ``workers`` forked processes: only from the main
     thread (a fork from a thread of the app could copy a lock another thread holds) of a
     process that may have children, and only when the work pays for their start (~0.1 s)."""
@@ -406,16 +521,18 @@ def _worth_processes(modes_x, modes_y, speeds, cut, workers) -> bool:
     if multiprocessing.current_process().daemon:
         return False
     samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
-    return float(np.sum(_cost(modes_x, modes_y, samples, cut))) >= PARALLEL_WORK
+    return min(float(np.sum(_cost(modes_x, modes_y, samples, cut))), budget) >= PARALLEL_WORK
 
 
-def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool) -> SdmLobes:
+def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool,
+               budget=np.inf) -> SdmLobes:
     """:func:`sdm_lobes` (``rpm`` checked); the batches of each phase go to ``pool`` if given
     (every speed's search is independent of its batch, so the result is the same)."""
     speeds = np.asarray(rpm, dtype=float)
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
+    f_res = _f_resolve(cols)
     lo, hi = float(speeds.min()), float(speeds.max())
     if hi / lo - 1 < 1e-9:
         samples, dense = np.array([lo]), np.array([False])
@@ -425,11 +542,18 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
             samples = np.unique(speeds)
             dense = np.zeros(samples.size, bool)
     tau = 60.0 / (teeth * samples)
-    periods = geom[2] * tau * f_max
+    periods = geom[2] * tau * f_res
     p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
     ok = p_need <= MAX_NODES
     warnings = []
-    if not ok.all():
+    cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling)
+    work = np.cumsum(_cost(modes_x, modes_y, samples, cut)[::-1])[::-1]  # from the fastest down
+    over = ok & (work > budget)
+    if over.any():
+        ok &= ~over
+        warnings.append(f"below {samples[over].max():.0f} rpm the semi-discretization would take more than a few "
+                        "seconds (`--method sdm` computes it); the zero-order lobes are used there")
+    elif not ok.all():
         slow = samples[~ok]
         warnings.append(f"below {slow.max():.0f} rpm the cut spans too many vibration periods for the "
                         f"semi-discretization's history ({MAX_NODES} nodes); the zero-order lobes are used there")
@@ -443,7 +567,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     k_min = np.min(cols[3])
     fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
     start = np.where(np.isfinite(start) & (start > 0), start, fallback)
-    run = (cols, geom, teeth, ktc, krc, f_max, depth_cap, pool)
+    run = (cols, geom, teeth, ktc, krc, f_res, depth_cap, pool)
     # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
     # tight first bracket: about half the evaluations).
     coarse = np.zeros(samples.size, bool)
@@ -455,13 +579,16 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     a_s[coarse], flip_s[coarse], chat_s[coarse] = _limits(run, tau[coarse], start[coarse], ok[coarse])
     rest = ~coarse
     known = coarse & ok & np.isfinite(a_s)
+    screened, below = _screen_dense(run, samples, tau, dense & rest & ok, known, a_s, flip_s, chat_s)
+    rest &= ~screened
     if rest.any():
         warm = known.sum() >= 2
         guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
+        guess = np.where(np.isfinite(below[rest]), below[rest], guess)
         a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
     island = guide is not None
     if island:
-        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok)
+        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok & ~screened)
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
     for _ in range(REFINE_ROUNDS):
@@ -491,6 +618,33 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
     return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
+
+
+def _screen_dense(run, samples, tau, cand, known, a_s, flip_s, chat_s):
+    """Where lobes are denser than the window a machinist can hold, the limit reported is the
+    lowest sample within ±DENSE_WINDOW; a sample stable at the highest computed limit within
+    twice that window cannot lower any window's lowest, so one evaluation there settles it:
+    it takes that limit (and its chatter kind). Returns (settled samples, the depth each
+    unsettled candidate chattered at: a start just above its limit; NaN elsewhere); fills
+    ``a_s``, ``flip_s``, ``chat_s`` of the settled ones in place."""
+    settled = np.zeros(samples.size, bool)
+    below = np.full(samples.size, np.nan)
+    idx = np.flatnonzero(cand)
+    ref = np.flatnonzero(known)
+    if idx.size == 0 or ref.size == 0:
+        return settled, below
+    lo = np.searchsorted(samples[ref], samples[idx] * (1 - 2 * DENSE_WINDOW), "left")
+    hi = np.searchsorted(samples[ref], samples[idx] * (1 + 2 * DENSE_WINDOW), "right")
+    top = np.array([ref[a + np.argmax(a_s[ref[a:b]])] if b > a else -1 for a, b in zip(lo, hi)])
+    idx, top = idx[top >= 0], top[top >= 0]
+    if idx.size == 0:
+        return settled, below
+    calm = _growth(run, tau[idx], a_s[top]) < 1.0
+    j, t = idx[calm], top[calm]
+    a_s[j], flip_s[j], chat_s[j] = a_s[t], flip_s[t], chat_s[t]
+    settled[j] = True
+    below[idx[~calm]] = a_s[top[~calm]]
+    return settled, below
 
 
 def _limits(run, tau, start, ok, warm: bool = False):

@@ -81,3 +81,45 @@ def test_depth_cap_limits_what_is_reported_stable():
     assert out["depth_cap_mm"] == pytest.approx(3.0)
     assert max(a for a in out["a_lim_mm"] if a is not None) <= 3.0
     assert all(p["a_lim_mm"] <= 3.0 for p in out["pockets"])
+
+
+def test_a_slot_at_low_speed_is_semi_discretized_and_converged():
+    """Slotting with 2 teeth at 6,000 rpm: ~22 periods of the 4.3 kHz mode in one tooth's cut
+    (once handed to the zero-order lobes). The limit holds with 2x finer steps and 1.5x the nodes."""
+    cut = dict(teeth=2, ktc=902e6, krc=243e6, diameter=20 * MM, ae=20 * MM, milling="down")
+    lobes = sdm_lobes(END_MILL_X, END_MILL_Y, rpm=np.array([6000.0]), **cut)
+    a = lobes.a_lim[0]
+    assert not lobes.warnings and 0.1 * MM < a < 50 * MM
+    fine, _ = sdm_growth(END_MILL_X, END_MILL_Y, rpm=6000.0, depth=np.array([0.99, 1.01]) * a, steps_per_mode=48,
+                         nodes=150, **cut)
+    assert fine[0] < 1 < fine[1]
+
+
+def test_the_largest_multiplier_of_a_large_map_is_that_of_all_eigenvalues():
+    """Large monodromy maps get their largest multiplier from a few Arnoldi steps."""
+    from taptune.machine import sdm
+
+    cut = dict(teeth=2, ktc=902e6, krc=243e6, diameter=20 * MM, ae=20 * MM, milling="up")
+    cols = sdm._modal(END_MILL_X, END_MILL_Y)
+    geom = sdm._geometry(2, 902e6, 243e6, 20 * MM, 20 * MM, "up")
+    tau = 60.0 / (2 * 8000.0)
+    plan = sdm._plan(*sdm._resolution(geom[2] * tau, sdm._f_resolve(cols), None, None))
+    depth = np.geomspace(0.2, 20.0, 12) * MM
+    phi = sdm._monodromy(sdm._steps(cols, geom, 2, cut["ktc"], cut["krc"], np.full(depth.size, tau), plan), depth, plan)
+    assert phi.shape[-1] >= sdm.ARNOLDI_MIN
+    rho, mu = sdm._critical(phi)
+    every = np.linalg.eigvals(phi)
+    top = every[np.arange(depth.size), np.argmax(np.abs(every), axis=1)]
+    assert rho == pytest.approx(np.abs(top), rel=1e-7)
+    assert np.all(np.abs(np.abs(mu.imag) - np.abs(top.imag)) < 1e-6)
+
+
+def test_auto_keeps_to_its_time_budget_and_says_below_which_speed():
+    """`auto` leaves the slowest speeds of a costly job to the zero-order lobes, with a warning
+    naming the speed; `sdm` (no budget) computes them."""
+    cut = dict(teeth=2, ktc=902e6, krc=243e6, diameter=20 * MM, ae=20 * MM, milling="down")
+    rpm = np.array([5000.0, 24000.0])
+    tight = sdm_lobes(END_MILL_X, END_MILL_Y, rpm=rpm, budget=1.0, **cut)
+    assert np.isnan(tight.a_lim[0]) and "below" in tight.warnings[0] and "--method sdm" in tight.warnings[0]
+    free = sdm_lobes(END_MILL_X, END_MILL_Y, rpm=np.array([5000.0]), **cut)
+    assert np.isfinite(free.a_lim[0]) and not free.warnings
