@@ -106,8 +106,6 @@ def test_sdm_limit_and_kind_match_the_reference(name, modes, tool, teeth, ratio,
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="sdm_lobes leaves a 2-tooth slot below ~16,750 rpm on this end mill to the zero-order "
-                          "lobes (MAX_NODES), 10 % off in the median", strict=False)
 def test_sdm_covers_a_wide_cut_at_low_speed():
     cut = _cut(MILL_CUT, 2, 1.0, "down")
     speeds = np.array([6000.0, 9000.0, 13000.0])
