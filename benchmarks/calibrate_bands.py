@@ -191,7 +191,8 @@ def rows(records: list[dict]) -> list[dict]:
                         "obj_freq": float(terms[:, 0].sum()), "obj_shape": float(terms[:, 1].sum()),
                         "n_measured": int(sum(measured)), "misfit": raw_misfit(ident),
                         "stickout": asm.stickout * 1e3, "stickout_tapped": case.described.stickout * 1e3,
-                        "diameter": rec["tool"]["diameter_mm"], "f_all": list(p.bending_hz)})
+                        "diameter": rec["tool"]["diameter_mm"], "f_all": list(p.bending_hz),
+                        "parts": {k: v[m] for k, v in b.geometry_parts_hz.items()}})
         return p
 
     reevaluate([r for r in records if "failed" not in r], band)
@@ -224,7 +225,7 @@ def cached_rows(paths, cache: str | None) -> list[dict]:
     for p in paths:
         st = Path(p).stat()
         key = f"{Path(p).resolve()}|{st.st_size}|{st.st_mtime_ns}"
-        if key not in store or any("misfit" not in r for r in store[key]):
+        if key not in store or any("parts" not in r for r in store[key]):
             store[key] = rows(load([p]))
         out += store[key]
     if cache:
@@ -594,6 +595,89 @@ def evidence(cal, val, by_tier: bool = True) -> None:
         print("  " + line(f"{title}: c per group × fit class", stats(rs, cells, cell=fit_class)))
 
 
+def decompose(rows_) -> None:
+    """Where the half-width comes from (issue 22): per tier and evidence group, the errors
+    beside the set part, the geometry part and each of its tolerances (medians, relative);
+    then, for holders the model describes, what covers their errors: the set part with the
+    stick-out parts alone (their geometry is exact: the diameter and flute-ratio parts and
+    the model-form term cover errors they do not have)."""
+    print("\nthe band's parts against the errors (medians; |err| also p90):")
+    names = ("stickout", "stickout_identified", "diameter", "flute_ratio")
+    for tier in sorted({r["tier"] for r in rows_}):
+        for g in bands.GROUPS:
+            rs = [r for r in rows_ if r["tier"] == tier and r["group"] == g]
+            if not rs:
+                continue
+            rel = lambda key: np.array([r[key] / r["f"] for r in rs])  # noqa: E731
+            e, s, geo = rel("err"), rel("set"), rel("geom")
+            part = {k: np.median([r["parts"].get(k, 0.0) / r["f"] for r in rs]) for k in names}
+            print(f"  {tier:12s} {g:8s} n {len(rs):4d}: |err| {100 * np.median(e):.3f} % (p90 "
+                  f"{100 * np.percentile(e, 90):.2f}); set {100 * np.median(s):.2f}, geometry "
+                  f"{100 * np.median(geo):.2f} (" + ", ".join(f"{k} {100 * v:.2f}" for k, v in part.items())
+                  + f"); set + geometry {100 * np.median(np.hypot(s, geo)):.2f} %, covers "
+                  f"{np.mean(e <= np.hypot(s, geo)):.0%}")
+    inside = [r for r in rows_ if r["tier"] == "infamily"]
+    if inside:
+        e = np.array([r["err"] / r["f"] for r in inside])
+        for title, keep in (("set + stick-out parts", ("stickout", "stickout_identified")),
+                            ("set + stick-out + diameter parts", ("stickout", "stickout_identified", "diameter"))):
+            h = np.array([math.sqrt(r["set"] ** 2 + sum(r["parts"].get(k, 0.0) ** 2 for k in keep)) / r["f"]
+                          for r in inside])
+            three = np.array([r["n_measured"] == 3 for r in inside])
+            print(f"  in the family, {title} alone: covers {np.mean(e <= h):.1%} at median ±{100 * np.median(h):.2f} % "
+                  f"(three modes heard: {np.mean((e <= h)[three]):.1%} at ±{100 * np.median(h[three]):.2f} %)")
+
+
+def offset_rows(records: list[dict], offsets_mm) -> list[dict]:
+    """Like :func:`rows`, at other stick-out changes than the stored queries: every stored
+    identification predicts its described stick-out + each offset [mm], and the truth
+    there is solved with a fresh stick-out reading (uniform within the case's own reading
+    error, as the corpus draws its queries; seeded by the case). Nothing is re-identified."""
+    from benchmarks.realism.corpus import case_of, make_query
+    from taptune.errors import InputError
+    from taptune.model.params import HolderParams
+
+    out = []
+    for rec in records:
+        if "failed" in rec:
+            continue
+        case = case_of(rec)
+        ident = rec["identification"]
+        sets = [HolderParams(**p) for p in ident["param_sets"]]
+        measured = [m is not None for m in ident["bending_measured_hz"]]
+        rng = np.random.default_rng(case.seed + 77)
+        so, err = case.described.stickout / 1e-3, case.stickout_error_mm
+        for off in offsets_mm:
+            try:
+                q = make_query(case.true_assembly, case.holder, so + off, so + off + float(rng.uniform(-err, err)))
+                p = predict(sets, case.described.with_stickout((so + off) * 1e-3),
+                            relative_floor=ident["relative_floor"], identified=[case.described], model_form=ZERO,
+                            measured_modes=measured)
+            except InputError:
+                continue  # the tool cannot stand out that far (or that little) in this holder
+            b = p.band
+            for m, (f, t) in enumerate(zip(p.bending_hz, q.truth.bending_hz)):
+                out.append({"case": rec["name"], "tier": tier_of(rec), "split": rec["split"], "mode": m + 1, "f": f,
+                            "err": abs(f - t), "set": b.set_hz[m], "geom": b.geometry_hz[m],
+                            "delta": b.delta_stickout_mm, "group": b.model_form_groups[m], "measured": measured[m],
+                            "n_measured": int(sum(measured))})
+    return out
+
+
+def by_delta(rows_, paths, offsets_mm) -> None:
+    """Coverage and median half-width of the shipped c per tier and stick-out change: the
+    stored queries' ``rows_`` beside predictions at ``offsets_mm`` from the identifications
+    of ``paths`` (:func:`offset_rows`)."""
+    extra = offset_rows(load(paths), offsets_mm)
+    print(f"\nthe shipped c by stick-out change (stored queries + offsets {offsets_mm} mm):")
+    allrows = rows_ + extra
+    for tier in sorted({r["tier"] for r in allrows}):
+        for d in sorted({round(r["delta"]) for r in allrows if r["tier"] == tier}):
+            rs = [r for r in allrows if r["tier"] == tier and round(r["delta"]) == d]
+            if len(rs) >= 30:
+                print("  " + line(f"{tier} Δ {d} mm", stats(rs, bands.MODEL_FORM)))
+
+
 def write_constants(c: dict, delta_ref: float, note: str) -> None:
     """Put the calibrated MODEL_FORM (and Δref, the note) into taptune/identify/bands.py."""
     path = REPO / "taptune" / "identify" / "bands.py"
@@ -733,6 +817,11 @@ def main(argv=None) -> int:
                                                           "(benchmarks/realism/two_taps.py) instead")
     ap.add_argument("--gauge", action="store_true", help="records whose stick-outs were read with a gauge (run "
                                                           "--stickout-error 0.05): compare c calibrated on them with the shipped c")
+    ap.add_argument("--decompose", action="store_true", help="also print the band's parts (set, each geometry "
+                                                              "tolerance) against the errors, per tier and group")
+    ap.add_argument("--offsets", type=float, nargs="+", metavar="MM",
+                    help="also predict these stick-out changes from the stored identifications of --records and "
+                         "--validate, and print the shipped c's coverage per stick-out change")
     ap.add_argument("--rewrite-results", nargs="+", metavar="JSON",
                     help="only redo the predictions of these results JSONs with the bands now in bands.py")
     args = ap.parse_args(argv)
@@ -769,6 +858,10 @@ def main(argv=None) -> int:
         variants(cal, val, args.by_tier)
     if args.evidence:
         evidence(cal, val, args.by_tier)
+    if args.decompose:
+        decompose(cal + val)
+    if args.offsets:
+        by_delta(cal + val, args.records + args.validate, args.offsets)
     if args.write:
         tiers = " + ".join(sorted({r["tier"] for r in cal}))
         n_cases = len({r["case"] for r in cal})

@@ -157,6 +157,7 @@ class Band:
         parts = np.array([self.set_hz, self.geometry_hz, self.model_form_hz]) ** 2
         names = ("what the tap cannot tell apart", "the stated geometry tolerances", "what the model leaves out")
         main = names[int(np.argmax(parts.sum(axis=1)))]
+        advice = self._largest_tolerance() if main == names[1] else ""
         where = ("" if self.delta_stickout_mm is None
                  else f" {round(self.delta_stickout_mm, 1):g} mm from the tapped stick-out,")  # 6.5, not 6
         evidence = ""
@@ -169,7 +170,25 @@ class Band:
                     said.append(f"{', '.join(modes)} {words[g]}")
             evidence = " (" + "; ".join(said) + ")"
         return (f"Each ± holds the true frequency in about {100 * self.coverage:.0f} of 100 such predictions:{where} "
-                f"{rel.min():.1f}–{rel.max():.1f} % of the frequency, mostly from {main}{evidence}.")
+                f"{rel.min():.1f}–{rel.max():.1f} % of the frequency, mostly from {main}{evidence}.{advice}")
+
+    def _largest_tolerance(self) -> str:
+        """Which stated tolerance makes most of the geometry part, and the key that states it
+        (with the default tolerances and a gauge-read stick-out mostly the flute ratio's;
+        with a ruler often the stick-out's: ``benchmarks/calibrate_bands.py --decompose``)."""
+        sums = {k: float(np.sum(np.square(v))) for k, v in self.geometry_parts_hz.items()}
+        if not sums:
+            return ""
+        sums["stickout"] = sums.get("stickout", 0.0) + sums.pop("stickout_identified", 0.0)
+        name = max(sums, key=sums.get)
+        tol = self.tolerances
+        said = {"stickout": f"the stick-out's ±{tol.stickout * 1e3:g} mm (read at each setting): if you measure it "
+                            f"more closely, state it as [setup] stickout_tolerance",
+                "diameter": f"the holder diameters' ±{100 * tol.diameter:g} %: if you know them better, state it as "
+                            f"[holder] diameter_tolerance",
+                "flute_ratio": f"the flute ratio's ±{tol.flute_ratio:g}: if you know it better, state it as "
+                               f"[tool] flute_ratio_tolerance"}
+        return f" Most of that is {said[name]}."
 
 
 def second_tap_advice(predictions) -> str | None:

@@ -208,3 +208,19 @@ def test_each_identification_counts_the_stickout_tolerance_it_stated(reference_a
     unstated = HolderEntry.create(reference_assembly.holder, SETS[0],
                                   identifications=[replace(record, stickout_tolerance_mm=None)])
     assert unstated.identified_assemblies()[0].tolerances == Tolerances()  # a ruler's, by default
+
+
+def test_band_text_names_the_tolerance_that_makes_most_of_the_geometry_part(reference_assembly):
+    target = reference_assembly.with_stickout(0.0635)
+    gauge = predict(SETS[:1], target, identified=[reference_assembly], model_form=(0, 0, 0),
+                    tolerances=Tolerances(stickout=0.05e-3, diameter=0.01, flute_ratio=0.05))
+    parts = gauge.band.geometry_parts_hz
+    assert np.sum(np.square(parts["flute_ratio"])) > np.sum(np.square(parts["stickout"]))
+    assert "Most of that is the flute ratio's ±0.05" in gauge.band_text()
+    assert "[tool] flute_ratio_tolerance" in gauge.band_text()
+    ruler = predict(SETS[:1], target, identified=[replace(reference_assembly, tolerances=Tolerances(stickout=0.8e-3))],
+                    model_form=(0, 0, 0), tolerances=Tolerances(stickout=0.8e-3, diameter=0.01, flute_ratio=0.01))
+    assert "the stick-out's ±0.8 mm" in ruler.band_text()
+    # Not where the model-form term makes most of the band.
+    wide = predict(SETS[:1], target, identified=[reference_assembly], model_form=(0.02, 0.02, 0.02))
+    assert "Most of that" not in wide.band_text() and "what the model leaves out" in wide.band_text()
