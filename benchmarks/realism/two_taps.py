@@ -62,7 +62,7 @@ def run_case(split: str, index: int, tier: str, seed: int = 0, stickout_error_mm
     from benchmarks.realism.audio import record
     from taptune.errors import TaptuneError
     from taptune.identify import IdentifyOptions, predict
-    from taptune.identify.bands import measured_modes
+    from taptune.identify.bands import measured_modes, taps_agree
     from taptune.identify.pipeline import identify_recordings
 
     case = make_case(split, index, tier=tier, stickout_error_mm=stickout_error_mm)
@@ -86,9 +86,10 @@ def run_case(split: str, index: int, tier: str, seed: int = 0, stickout_error_mm
     # Per mode: measured in either tap (the realism run's "measured" flag, for one tap).
     either = [next((m[n] for m in result.bending_measured_hz if m[n] is not None), None) for n in range(3)]
     identified = [case.described, second.described]
+    agreed = taps_agree(result.bending_measured_hz, result.relative_floor)
     out["predictions"] = predictions(replace(case, queries=(other,)), lambda asm: predict(
         result.param_sets, asm, relative_floor=result.relative_floor, identified=identified,
-        measured_modes=measured), either)
+        measured_modes=measured, agreed=agreed), either)
     # The band's parts without the model-form term, for calibrating it on joint identifications
     # (benchmarks/calibrate_bands.py: the smallest c that covers each error).
     bare = predict(result.param_sets, case.described_at(other.stickout_mm), relative_floor=result.relative_floor,
