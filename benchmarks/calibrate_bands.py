@@ -110,6 +110,10 @@ split, first 16 holders per tier, 15 identified each; not stored, ≈ 3 CPU-min 
 6 of 30 agreed (issue 5, harsh 1), errors ≤ 0.30 %; of the 36 predictions of agreeing
 holders (with the in-family 6) 35 lay inside set + geometry alone, one needed c 0.127 %:
 ``MODEL_FORM_AGREED`` pinned (free and unknown: too few, they keep the joint c).
+Held out (validation split, first 12 per tier, gauged; ``two_taps_infamily_validation``):
+none of 24 holders outside the family agreed (their bands, the joint c: issue 97.2 % at
+±1.64 %, harsh 100 % at ±1.96 %); 7 of 12 in the family did, their 21 predictions all
+covered at ±0.35 % (all 12: 97.2 % at ±0.61 %, joint c ±0.98 %).
 
 Where the band comes from (``--decompose``, 2026-11-27; in-family holders with the
 stick-out stated to 0.05 mm, ``results_infamily_gauge_*.json``, 288 predictions):

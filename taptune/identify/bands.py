@@ -72,7 +72,10 @@ PINNED_SPREAD = 0.002
 #: ``calibrate_bands.py --evidence``): c conditioned on what the fit shows. One tap's
 #: misfit barely ranks the errors (Spearman +0.16 pinned, +0.03 free, +0.18 unknown), and
 #: a mode pinned only when the fit meets all three modes within 2 × 0.05 % needs c 0.84 %
-#: on the harsh tier's gauge-read holders (0.35 % ruler-read): no narrower band.
+#: on the harsh tier's gauge-read holders (0.35 % ruler-read): no narrower band. Nor
+#: c of their own for gauge-read stick-outs (48 holders: pinned 0.66, free 0.40, unknown
+#: 0.63 %; held-out harsh tier covered 82.6 %). In the family the band's width is not
+#: overstated parts but errors one tap cannot rule out (``calibrate_bands.py --decompose``).
 MODEL_FORM = {"pinned": 0.00566, "free": 0.01074, "unknown": 0.02884}
 #: The same for a holder identified jointly from two or more taps (at different
 #: stick-outs), calibrated alike on joint identifications of the corpus
