@@ -101,11 +101,15 @@ joint fit meets all within 0.1 %. With a ruler none of 48 holders outside the fa
 agreed (``two_taps_<tier>_<split>_12.json``; with 5–6 heard their joint misfit is
 0.13–3.6 %), 13 of 24 in the family did (``two_taps_infamily_*.json``, errors ≤ 0.11 %).
 With the stick-outs read to ±0.05 mm (``two_taps --stickout-error 0.05``, calibration
-split, first 16 holders per tier, 15 identified each; not stored, ≈ 3 CPU-min per tier)::
+split, first 16 holders per tier, 15 identified each; validation split, first 12; stored as
+``two_taps_gauge_<tier>_<split>.json``, whose ``predictions`` carry the joint c: the
+``rows`` serve here; ≈ 3 CPU-min per 16 holders)::
 
-    python -m benchmarks.realism.two_taps --tier issue --split calibration --n 16 --stickout-error 0.05 --out tt_issue.json
-    python benchmarks/calibrate_bands.py --joint --evidence --records tt_issue.json tt_harsh.json \
-        $R/two_taps_infamily_calibration.json --validate <held-out two-tap JSONs>
+    python -m benchmarks.realism.two_taps --tier issue --split calibration --n 16 --stickout-error 0.05 \
+        --out $R/two_taps_gauge_issue_calibration.json   # likewise harsh; --split validation --n 12
+    python benchmarks/calibrate_bands.py --joint --evidence --records $R/two_taps_gauge_*_calibration.json \
+        $R/two_taps_infamily_calibration.json \
+        --validate $R/two_taps_gauge_*_validation.json $R/two_taps_infamily_validation.json
 
 6 of 30 agreed (issue 5, harsh 1), errors ≤ 0.30 %; of the 36 predictions of agreeing
 holders (with the in-family 6) 35 lay inside set + geometry alone, one needed c 0.127 %:
