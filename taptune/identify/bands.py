@@ -225,7 +225,8 @@ def second_tap_advice(predictions) -> str | None:
     return (f"one recording only: the bands reach ±{100 * worst:.1f} %; tap the same holder once more at a "
             f"stick-out about 20 mm different and identify both recordings together (taptune identify "
             f"A.wav B.wav --assembly A.toml --assembly B.toml): that pins what one tap cannot tell apart and "
-            f"may hear modes this one did not (the model's own part of the band stays)")
+            f"may hear modes this one did not (the model's own part of the band stays, unless one set of "
+            f"holder parameters meets both taps within 0.1 %, with both stick-outs measured closely)")
 
 
 # --------------------------------------------------------------------------- geometry
