@@ -137,6 +137,9 @@ class Band:
     model_form_groups : tuple of str
         Evidence group of each mode (``pinned``, ``free`` or ``unknown``, see
         :func:`evidence_groups`): which model-form coefficient it got.
+    taps_agree : bool
+        The holder's sets come from one joint fit of two or more taps that agree
+        (:func:`taps_agree`): the coefficients of :data:`MODEL_FORM_AGREED`.
     """
 
     half_width_hz: tuple[float, ...]
@@ -151,6 +154,7 @@ class Band:
     method: str = METHOD
     calibration: str = CALIBRATION
     model_form_groups: tuple[str, ...] = ()
+    taps_agree: bool = False
 
     def relative(self, bending_hz) -> np.ndarray:
         """Half-widths relative to the frequencies."""
@@ -171,6 +175,7 @@ class Band:
             "tolerances": self.tolerances.to_dict(),
             "delta_stickout_mm": None if self.delta_stickout_mm is None else round(self.delta_stickout_mm, 3),
             "recordings": self.recordings,
+            "taps_agree": self.taps_agree,
             "method": self.method,
             "coverage_target": self.coverage,
             "calibration": self.calibration,
@@ -193,6 +198,8 @@ class Band:
                 modes = [f"f{i + 1}" for i, x in enumerate(self.model_form_groups) if x == g]
                 if modes:
                     said.append(f"{', '.join(modes)} {words[g]}")
+            if self.taps_agree:
+                said.append("the taps agree")
             evidence = " (" + "; ".join(said) + ")"
         return (f"Each ± holds the true frequency in about {100 * self.coverage:.0f} of 100 such predictions:{where} "
                 f"{rel.min():.1f}–{rel.max():.1f} % of the frequency, mostly from {main}{evidence}.{advice}")

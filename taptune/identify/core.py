@@ -344,6 +344,7 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         geometry_hz=tuple(map(float, geometry_hz)), model_form_hz=tuple(map(float, model_hz)),
         geometry_parts_hz={k: tuple(map(float, v)) for k, v in parts.items()},
         delta_stickout_mm=delta, recordings=len(identified), tolerances=tol, model_form_groups=groups,
+        taps_agree=bool(agreed and len(identified) >= 2 and model_form is None),
     )
     return Prediction(
         stickout_mm=assembly.stickout * 1e3,

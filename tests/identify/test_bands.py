@@ -254,3 +254,5 @@ def test_agreeing_taps_take_the_agreed_coefficients_for_pinned_modes_only(refere
     expected = MODEL_FORM_AGREED["pinned"] * f * (1 + agreed.band.delta_stickout_mm / DELTA_REF_MM)
     assert np.allclose(agreed.band.model_form_hz, expected)
     assert np.all(np.array(agreed.bending_hz_spread) < joint.bending_hz_spread)
+    assert agreed.band.taps_agree and not joint.band.taps_agree and agreed.band.to_dict()["taps_agree"] is True
+    assert "the taps agree" in agreed.band_text() and "the taps agree" not in joint.band_text()
