@@ -29,8 +29,8 @@ per mode, in Hz::
 
 Two or more taps identified jointly take :data:`MODEL_FORM_JOINT`, or
 :data:`MODEL_FORM_AGREED` when they agree (:func:`taps_agree`: the one parameter set meets
-five or more frequencies heard at two stick-outs within 0.1 %, which holders outside the
-model family rarely manage).
+five or more frequencies heard at stick-outs 5 mm or more apart within 0.1 %, which holders
+outside the model family rarely manage).
 
 The calibration targets 90 % coverage in each group; the validation splits, never used
 to calibrate, measure it.
@@ -105,6 +105,8 @@ AGREED_HEARD = 5
 #: ... and the one joint parameter set meets every one within this (relative; twice the
 #: peaks' 0.05 % precision).
 AGREED_MISFIT = 1e-3
+#: ... at stick-outs at least this far apart [mm].
+AGREED_SPAN_MM = 5.0
 #: Δref of the growth with the stick-out change [mm], fitted among 5/10/20/40 mm on the
 #: calibration records (smallest median half-width; the four differ by < 0.06 %).
 DELTA_REF_MM = 10.0
@@ -450,7 +452,7 @@ def coefficients_for(model_form, groups, n_modes: int) -> np.ndarray:
     return np.concatenate([c, np.full(max(n_modes - c.size, 0), c[-1])])[:n_modes]
 
 
-def taps_agree(measured_hz, misfit: float) -> bool:
+def taps_agree(measured_hz, misfit: float, stickouts=None) -> bool:
     """Whether a joint fit of two or more taps shows that the model describes the holder.
 
     Parameters
@@ -460,6 +462,10 @@ def taps_agree(measured_hz, misfit: float) -> bool:
         (None: not measured).
     misfit : float
         The joint fit's largest relative miss on them [–] (its ``relative_floor``).
+    stickouts : sequence of float, optional
+        The recordings' stick-outs [m]: they must span at least :data:`AGREED_SPAN_MM`
+        (taps at one stick-out say nothing about the transfer; the calibration's were
+        5–10 mm apart). None: not checked.
 
     Returns
     -------
@@ -468,7 +474,8 @@ def taps_agree(measured_hz, misfit: float) -> bool:
         between them and the one parameter set meets all within :data:`AGREED_MISFIT`.
     """
     heard = sum(f is not None for m in measured_hz for f in m)
-    return len(measured_hz) >= 2 and heard >= AGREED_HEARD and misfit <= AGREED_MISFIT
+    spread = stickouts is None or (max(stickouts) - min(stickouts)) * 1e3 >= AGREED_SPAN_MM - 1e-9
+    return len(measured_hz) >= 2 and heard >= AGREED_HEARD and misfit <= AGREED_MISFIT and spread
 
 
 def model_form_for(recordings: int, agreed: bool = False) -> dict:

@@ -234,6 +234,8 @@ def test_taps_agree_needs_two_taps_five_heard_frequencies_and_a_joint_fit_within
     assert not taps_agree(six, 1.5 * AGREED_MISFIT)  # the one set misses a frequency
     assert not taps_agree([[5000.0, 14000.0, None], [6000.0, 15000.0, None]], 5e-4)  # four heard
     assert not taps_agree([[5000.0, 14000.0, 22000.0]], 5e-4)  # one tap: five parameters meet three always
+    assert taps_agree(six, 5e-4, [0.050, 0.060]) and taps_agree(six, 5e-4, [0.050, 0.055])
+    assert not taps_agree(six, 5e-4, [0.050, 0.052])  # two taps at about one stick-out say nothing of transfer
 
 
 def test_agreeing_taps_take_the_agreed_coefficients_for_pinned_modes_only(reference_assembly):
