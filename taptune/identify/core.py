@@ -292,7 +292,7 @@ def identify(
 
 def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_modes: int = 3,
             relative_floor: float = 5e-4, *, identified: Sequence | None = None, tolerances=None,
-            model_form=None, measured_modes=None) -> Prediction:
+            model_form=None, measured_modes=None, agreed: bool = False) -> Prediction:
     """Predict the bending modes of ``assembly`` with the holder's near-optimal parameter sets.
 
     The first set is the best fit and gives the values. The ± half-width
@@ -315,6 +315,9 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         several; zeros give the parameter and geometry band alone).
     measured_modes : sequence of bool, optional
         Which modes the tap(s) measured (sets the evidence groups, :func:`bands.evidence_groups`).
+    agreed : bool
+        The sets come from one joint fit of the ``identified`` recordings that agree
+        (:func:`bands.taps_agree`): the narrower model-form term of agreeing taps.
     """
     from taptune.model import ModelOptions, build_model, solve_modes
 
@@ -337,7 +340,7 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
     geometry_hz, parts = bands.geometry_term(assembly, param_sets[0], identified, tol, options, f[0])
     delta = bands.delta_stickout_mm(assembly, identified)
     groups = bands.evidence_groups(f, measured_modes)
-    coefficients = bands.model_form_for(len(identified)) if model_form is None else model_form
+    coefficients = bands.model_form_for(len(identified), agreed) if model_form is None else model_form
     model_hz = bands.model_form_term(f[0], delta, coefficients, groups)
     half = bands.compose(set_hz, geometry_hz, model_hz)
     band = Band(
@@ -345,6 +348,7 @@ def predict(param_sets: Sequence[HolderParams], assembly, model_options=None, n_
         geometry_hz=tuple(map(float, geometry_hz)), model_form_hz=tuple(map(float, model_hz)),
         geometry_parts_hz={k: tuple(map(float, v)) for k, v in parts.items()},
         delta_stickout_mm=delta, recordings=len(identified), tolerances=tol, model_form_groups=groups,
+        taps_agree=bool(agreed and len(identified) >= 2 and model_form is None),
     )
     return Prediction(
         stickout_mm=assembly.stickout * 1e3,

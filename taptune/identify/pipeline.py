@@ -190,7 +190,7 @@ def transfer_outlook(result, assemblies, offset_mm: float = 20.0):
     recording's stick-out + ``offset_mm`` (or − ``offset_mm`` / 2 when the tool cannot come
     out that far); None when neither stick-out is valid."""
     from taptune.errors import InputError
-    from taptune.identify.bands import measured_modes
+    from taptune.identify.bands import measured_modes, taps_agree
     from taptune.identify.core import predict
 
     base = assemblies[0]
@@ -201,5 +201,7 @@ def transfer_outlook(result, assemblies, offset_mm: float = 20.0):
             continue
         measured = getattr(result, "bending_measured_hz", None)
         return predict(result.param_sets, target, relative_floor=result.relative_floor, identified=list(assemblies),
-                       measured_modes=None if measured is None else measured_modes(measured))
+                       measured_modes=None if measured is None else measured_modes(measured),
+                       agreed=measured is not None and taps_agree(measured, result.relative_floor,
+                                                                  [a.stickout for a in assemblies]))
     return None

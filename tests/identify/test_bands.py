@@ -208,3 +208,53 @@ def test_each_identification_counts_the_stickout_tolerance_it_stated(reference_a
     unstated = HolderEntry.create(reference_assembly.holder, SETS[0],
                                   identifications=[replace(record, stickout_tolerance_mm=None)])
     assert unstated.identified_assemblies()[0].tolerances == Tolerances()  # a ruler's, by default
+
+
+def test_band_text_names_the_tolerance_that_makes_most_of_the_geometry_part(reference_assembly):
+    target = reference_assembly.with_stickout(0.0635)
+    gauge = predict(SETS[:1], target, identified=[reference_assembly], model_form=(0, 0, 0),
+                    tolerances=Tolerances(stickout=0.05e-3, diameter=0.01, flute_ratio=0.05))
+    parts = gauge.band.geometry_parts_hz
+    assert np.sum(np.square(parts["flute_ratio"])) > np.sum(np.square(parts["stickout"]))
+    assert "Most of that is the flute ratio's ±0.05" in gauge.band_text()
+    assert "[tool] flute_ratio_tolerance" in gauge.band_text()
+    ruler = predict(SETS[:1], target, identified=[replace(reference_assembly, tolerances=Tolerances(stickout=0.8e-3))],
+                    model_form=(0, 0, 0), tolerances=Tolerances(stickout=0.8e-3, diameter=0.01, flute_ratio=0.01))
+    assert "the stick-out's ±0.8 mm" in ruler.band_text()
+    # Not where the model-form term makes most of the band.
+    wide = predict(SETS[:1], target, identified=[reference_assembly], model_form=(0.02, 0.02, 0.02))
+    assert "Most of that" not in wide.band_text() and "what the model leaves out" in wide.band_text()
+
+
+def test_taps_agree_needs_two_taps_five_heard_frequencies_and_a_joint_fit_within_0_1_percent():
+    from taptune.identify.bands import AGREED_MISFIT, taps_agree
+
+    six = [[5000.0, 14000.0, 22000.0], [6000.0, 15000.0, None]]
+    assert taps_agree(six, 5e-4) and taps_agree(six, AGREED_MISFIT)
+    assert not taps_agree(six, 1.5 * AGREED_MISFIT)  # the one set misses a frequency
+    assert not taps_agree([[5000.0, 14000.0, None], [6000.0, 15000.0, None]], 5e-4)  # four heard
+    assert not taps_agree([[5000.0, 14000.0, 22000.0]], 5e-4)  # one tap: five parameters meet three always
+    assert taps_agree(six, 5e-4, [0.050, 0.060]) and taps_agree(six, 5e-4, [0.050, 0.055])
+    assert not taps_agree(six, 5e-4, [0.050, 0.052])  # two taps at about one stick-out say nothing of transfer
+
+
+def test_agreeing_taps_take_the_agreed_coefficients_for_pinned_modes_only(reference_assembly):
+    from taptune.identify.bands import MODEL_FORM_AGREED, MODEL_FORM_JOINT, model_form_for
+
+    assert model_form_for(2, agreed=True) is MODEL_FORM_AGREED and model_form_for(2) is MODEL_FORM_JOINT
+    assert model_form_for(1, agreed=True) is MODEL_FORM  # one tap cannot agree
+    assert MODEL_FORM_AGREED["pinned"] < MODEL_FORM["pinned"]
+    assert MODEL_FORM_AGREED["free"] == MODEL_FORM_JOINT["free"]
+    assert MODEL_FORM_AGREED["unknown"] == MODEL_FORM_JOINT["unknown"]
+    taps = [reference_assembly, reference_assembly.with_stickout(0.0635)]
+    target = reference_assembly.with_stickout(0.0735)
+    sets = [NOMINAL, replace(NOMINAL, k_tt=NOMINAL.k_tt * 1.0001)]  # agree on every mode: all pinned
+    joint = predict(sets, target, identified=taps, measured_modes=(True, True, True))
+    agreed = predict(sets, target, identified=taps, measured_modes=(True, True, True), agreed=True)
+    assert joint.band.model_form_groups == agreed.band.model_form_groups == ("pinned",) * 3
+    f = np.array(agreed.bending_hz)
+    expected = MODEL_FORM_AGREED["pinned"] * f * (1 + agreed.band.delta_stickout_mm / DELTA_REF_MM)
+    assert np.allclose(agreed.band.model_form_hz, expected)
+    assert np.all(np.array(agreed.bending_hz_spread) < joint.bending_hz_spread)
+    assert agreed.band.taps_agree and not joint.band.taps_agree and agreed.band.to_dict()["taps_agree"] is True
+    assert "the taps agree" in agreed.band_text() and "the taps agree" not in joint.band_text()
