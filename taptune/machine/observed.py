@@ -40,7 +40,27 @@ import numpy as np
 SIGMA = 0.15
 
 
-def set_weights(limits, depths, verdicts, sigma: float = SIGMA) -> np.ndarray:
+#: Tool points drawn from the weighed band for its safe depth and pockets.
+DRAWS = 256
+#: Chance that a cut's verdict is wrong whatever the tool point (a misheard or mislabelled cut):
+#: one such cut must not rule out the truth.
+LAPSE = 0.02
+_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+
+
+def _log_likelihood(limits, depths, verdicts, sigma: float, lapse: float = LAPSE) -> np.ndarray:
+    """Log-probability of the verdicts for every row of ``limits`` (..., n_cuts) [m]: the limit
+    scattered by σ (log scale), and a verdict wrong with probability ``lapse``."""
+    from scipy.special import ndtr
+
+    a = np.asarray(limits, float)
+    z = (np.log(np.asarray(depths, float)) - np.log(np.where(np.isfinite(a), a, 1e6))) / sigma
+    sign = np.array([{"chatter": 1.0, "stable": -1.0}.get(v, 0.0) for v in verdicts])
+    p = lapse + (1 - 2 * lapse) * ndtr(sign * z)
+    return np.where(sign != 0, np.log(p), 0.0).sum(axis=-1)
+
+
+def set_weights(limits, depths, verdicts, sigma: float = SIGMA, lapse: float = 0.0) -> np.ndarray:
     """Weights (sum 1) of the parameter sets given the observed cuts.
 
     Parameters
@@ -53,15 +73,12 @@ def set_weights(limits, depths, verdicts, sigma: float = SIGMA) -> np.ndarray:
         "stable", "chatter" or "unclear" per cut.
     sigma : float
         Relative scatter of the limit (log scale).
+    lapse : float
+        Chance that a verdict is wrong whatever the set (0: the verdicts as heard; :func:`observed_band`
+        takes :data:`LAPSE`).
     """
-    from scipy.special import log_ndtr
-
     a = np.asarray(limits, float)
-    a = a[:, None] if a.ndim == 1 else a
-    d = np.asarray(depths, float)
-    z = (np.log(d)[None, :] - np.log(np.where(np.isfinite(a), a, 1e6))) / sigma
-    sign = np.array([{"chatter": 1.0, "stable": -1.0}.get(v, 0.0) for v in verdicts])
-    loglik = np.where(sign != 0, log_ndtr(sign[None, :] * z), 0.0).sum(axis=1)
+    loglik = _log_likelihood(a[:, None] if a.ndim == 1 else a, depths, verdicts, sigma, lapse)
     w = np.exp(loglik - loglik.max())
     return w / w.sum()
 
@@ -109,17 +126,24 @@ class ObservedBand:
     ----------
     prior, band : taptune.machine.band.LobeBand
         Without and with the observations (``band`` is ``prior`` when no cut counts).
-    weights : ndarray
-        Weight of each sample (sum 1; equal without cuts).
-    scales : ndarray
-        The samples' frequency factors s.
+    weights : ndarray, shape (len(scales), len(magnitudes))
+        Weight of each pair (s, g) of the grid (sum 1; equal without cuts).
+    scales, magnitudes : ndarray
+        The grid's frequency factors s and dynamic-stiffness divisors g (each ascending).
     cuts : int
         Observed cuts that carried weight (stable or chatter, inside the speed grid).
     width_before, width_after : float
-        Central ``confidence`` interval of s (its relative width: the band of the tool-point
-        frequencies the lobes allow).
+        Central ``confidence`` interval of s, before and after (its relative width: the band
+        of the tool-point frequencies, which decides where the lobes lie).
     shift : float
         The weighted median of s less 1 (the observations' shift of the tool-point frequencies).
+    stiffness_width_before, stiffness_width_after : float
+        Central ``confidence`` interval of g (its width relative to the prior's median g = 1:
+        the band of the tool point's dynamic stiffness, which scales every limit).
+    stiffness_shift : float
+        The weighted median of g less 1 (+0.2: the cuts say the limits lie 20 % higher).
+    depth_width_before, depth_width_after : float
+        Median over the speeds of ln(a_high / a_low) (the band of the limit itself, relative).
     warnings : tuple of str
     """
 
@@ -132,16 +156,40 @@ class ObservedBand:
     width_after: float
     shift: float
     warnings: tuple = ()
+    magnitudes: np.ndarray = None
+    stiffness_width_before: float = 0.0
+    stiffness_width_after: float = 0.0
+    stiffness_shift: float = 0.0
+    depth_width_before: float = 0.0
+    depth_width_after: float = 0.0
 
     @property
     def narrowing(self) -> float:
         """Fraction by which the observations narrowed the band of s (0: not at all)."""
         return 1.0 - self.width_after / self.width_before if self.width_before > 0 else 0.0
 
+    @property
+    def stiffness_narrowing(self) -> float:
+        """Fraction by which the observations narrowed the band of g (0: not at all)."""
+        b = self.stiffness_width_before
+        return 1.0 - self.stiffness_width_after / b if b > 0 else 0.0
+
+    @property
+    def depth_narrowing(self) -> float:
+        """Fraction by which the observations narrowed the band of the limit (median over the
+        speeds; negative: the band with the cuts is wider, the scatter of the cuts themselves)."""
+        b = self.depth_width_before
+        return 1.0 - self.depth_width_after / b if b > 0 else 0.0
+
     def to_dict(self) -> dict:
         return {"observed_cuts_used": self.cuts, "band_width_before_pct": 100 * self.width_before,
                 "band_width_after_pct": 100 * self.width_after, "band_narrowed_pct": 100 * self.narrowing,
-                "toolpoint_frequency_shift_pct": 100 * self.shift}
+                "toolpoint_frequency_shift_pct": 100 * self.shift,
+                "stiffness_band_width_before_pct": 100 * self.stiffness_width_before,
+                "stiffness_band_width_after_pct": 100 * self.stiffness_width_after,
+                "stiffness_band_narrowed_pct": 100 * self.stiffness_narrowing,
+                "toolpoint_stiffness_shift_pct": 100 * self.stiffness_shift,
+                "depth_band_narrowed_pct": 100 * self.depth_narrowing}
 
 
 def _weighted_quantile(x, w, q) -> float:
@@ -150,24 +198,39 @@ def _weighted_quantile(x, w, q) -> float:
     return float(np.asarray(x, float)[order][min(np.searchsorted(cw, q * cw[-1] - 1e-12), len(x) - 1)])
 
 
+def _width(x, w, confidence: float) -> float:
+    """Width of the central ``confidence`` interval of x weighted by w."""
+    return _weighted_quantile(x, w, (1 + confidence) / 2) - _weighted_quantile(x, w, (1 - confidence) / 2)
+
+
 def resampled(scales, weights) -> np.ndarray:
     """As many factors as ``scales``, drawn at evenly spaced quantiles of the weights (systematic
     resampling, deterministic): equal-weight samples that the band's quantiles can take as they are."""
     s = np.asarray(scales, float)
-    return s[_resampled_index(weights)]
+    return s[_resampled_index(weights, len(s))]
 
 
-def _resampled_index(weights) -> np.ndarray:
-    """Indices of :func:`resampled`: as many as weights, at evenly spaced quantiles of them."""
+def _resampled_index(weights, n: int) -> np.ndarray:
+    """``n`` indices at evenly spaced quantiles of the weights."""
     w = np.asarray(weights, float)
     cw = np.cumsum(w) / np.sum(w)
-    i = np.searchsorted(cw, (np.arange(len(w)) + 0.5) / len(w))
+    i = np.searchsorted(cw, (np.arange(n) + 0.5) / n)
     return np.minimum(i, len(w) - 1)
 
 
 def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float, depth_cap: float = np.inf,
                   sources: str = "", sigma: float = SIGMA, magnitudes=None) -> ObservedBand:
     """The band of :func:`taptune.machine.band.lobe_band` with its samples weighed by the observed ``cuts``.
+
+    s and g are independent in the band (:func:`taptune.machine.band.band_samples`), and its
+    s and its g are each evenly spaced quantiles of their own distribution: every s with
+    every g, equally weighted, is the band on a full grid (64 × 64 pairs for one
+    interpolation per s). The cuts weigh each pair (:func:`set_weights`, with a verdict wrong
+    with probability :data:`LAPSE`); the band with the cuts is the posterior predictive of
+    the limit: :data:`DRAWS` pairs drawn at evenly spaced quantiles of the weights, each
+    with its limit scattered by e^(σ z) (z at evenly spaced normal quantiles): a limit the
+    band does not capture moves the next cut as it moved the observed ones. The safe depth
+    is the (1 − P) quantile of the draws per speed, the pockets as without observations.
 
     Parameters
     ----------
@@ -188,60 +251,76 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
         (chatter where ≥ P of the samples are stable, stable where ≥ P chatter), and one when
         the cuts point beyond the band (the best samples are its outermost).
     """
+    from scipy.special import ndtr, ndtri
+
     from taptune.machine.band import lobe_band, safe_pockets, sample_limits, LobeBand
 
-    s = np.asarray(scales, float)
-    g = np.ones_like(s) if magnitudes is None else np.asarray(magnitudes, float)
+    s0 = np.asarray(scales, float)
+    g0 = np.ones_like(s0) if magnitudes is None else np.asarray(magnitudes, float)
+    s, g = np.unique(s0), np.unique(g0)
     rpm = np.asarray(rpm_ext, float)[inner]
-    prior = lobe_band(rpm_ext, a_ext, inner, s, confidence, depth_cap, sources, g)
+    prior = lobe_band(rpm_ext, a_ext, inner, s0, confidence, depth_cap, sources, g0)
     inside = [(float(n), float(d), v) for n, d, v in cuts
               if v in ("stable", "chatter") and rpm[0] <= n <= rpm[-1] and d > 0]
-    lo_q, hi_q = (1 - confidence) / 2, (1 + confidence) / 2
-    equal = np.full(len(s), 1.0 / len(s))
-    width0 = (_weighted_quantile(s, equal, hi_q) - _weighted_quantile(s, equal, lo_q))
-    if not inside or len(s) == 1:
-        return ObservedBand(prior, prior, equal, s, 0, width0, width0, _weighted_quantile(s, equal, 0.5) - 1.0)
+    equal = np.full((s.size, g.size), 1.0 / (s.size * g.size))
+    ws0, wg0 = equal.sum(axis=1), equal.sum(axis=0)
+    width0, gwidth0 = _width(s, ws0, confidence), _width(g, wg0, confidence)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dwidth0 = float(np.nanmedian(np.log(prior.a_high / prior.a_low)))
+    if not inside or len(s0) == 1:
+        return ObservedBand(prior, prior, equal, s, 0, width0, width0, _weighted_quantile(s, ws0, 0.5) - 1.0,
+                            magnitudes=g, stiffness_width_before=gwidth0, stiffness_width_after=gwidth0,
+                            stiffness_shift=_weighted_quantile(g, wg0, 0.5) - 1.0,
+                            depth_width_before=dwidth0, depth_width_after=dwidth0)
     n_obs = np.array([c[0] for c in inside])
     depth = np.array([c[1] for c in inside])
     verdicts = [c[2] for c in inside]
-    lim = np.minimum(sample_limits(rpm_ext, a_ext, n_obs, s, g), depth_cap)  # (samples, cuts)
+    lim0 = np.minimum(sample_limits(rpm_ext, a_ext, n_obs, s0, g0), depth_cap)  # the band's samples at the cuts
     warnings = []
     for j, (n, d, v) in enumerate(inside):
-        p_stable = float(np.mean(lim[:, j] > d))
+        p_stable = float(np.mean(lim0[:, j] > d))
         if v == "chatter" and p_stable >= confidence:
             warnings.append(f"chatter observed at {n:.0f} rpm and {d * 1e3:.3g} mm where the lobes say stable with "
                             f"{100 * p_stable:.0f} % confidence: the model is off there")
         elif v == "stable" and 1 - p_stable >= confidence:
             warnings.append(f"a clean cut at {n:.0f} rpm and {d * 1e3:.3g} mm where the lobes say chatter with "
                             f"{100 * (1 - p_stable):.0f} % confidence: the model is off there")
-    w = set_weights(lim, depth, verdicts, sigma)
-    shift = _weighted_quantile(s, w, 0.5) - 1.0
-    width1 = _weighted_quantile(s, w, hi_q) - _weighted_quantile(s, w, lo_q)
-    # Cuts that even the sample explaining all of them best gets wrong with ≥ P: beyond the band.
-    from scipy.special import ndtr
-
-    best = int(np.argmax(w))
+    # Every pair (s, g): limit g s² a(n/s) at the cuts, shape (s, g, cuts).
+    lim = np.minimum(g[None, :, None] * sample_limits(rpm_ext, a_ext, n_obs, s)[:, None, :], depth_cap)
+    loglik = _log_likelihood(lim, depth, verdicts, sigma)
+    w = np.exp(loglik - loglik.max())
+    w /= w.sum()
+    ws, wg = w.sum(axis=1), w.sum(axis=0)
+    # Cuts that even the pair explaining all of them best gets wrong with ≥ P: beyond the band.
+    best = np.unravel_index(int(np.argmax(w)), w.shape)
     sign = np.array([1.0 if v == "chatter" else -1.0 for v in verdicts])
-    p_best = ndtr(sign * (np.log(depth) - np.log(np.where(np.isfinite(lim[best]), lim[best], 1e6))) / sigma)
+    a_best = lim[best]
+    p_best = ndtr(sign * (np.log(depth) - np.log(np.where(np.isfinite(a_best), a_best, 1e6))) / sigma)
     beyond = np.flatnonzero(p_best < 1 - confidence)
     if beyond.size:
         where = ", ".join(f"{n_obs[j]:.0f} rpm" for j in beyond[:3])
         warnings.append(f"no tool point within the holder's band explains the cut(s) at {where}: the holder or its "
                         "model is off (tap the assembly again), or the chatter is not the tool's")
-    # The weighted samples, resampled to equal weights, give the band as without observations;
-    # the safe depth is capped by the weighted median sample's limit (not the central lobes').
-    idx = _resampled_index(w)
-    rs = s[idx]
-    samples = np.minimum(sample_limits(rpm_ext, a_ext, rpm, rs, g[idx]), depth_cap)
-    median = np.minimum(sample_limits(rpm_ext, a_ext, rpm, [_weighted_quantile(s, w, 0.5)],
-                                      [_weighted_quantile(g, w, 0.5)])[0], depth_cap)
-    low = np.minimum(np.quantile(samples, 1 - confidence, axis=0, method="inverted_cdf"), median)
+    # The posterior predictive: pairs drawn by their weights, each limit scattered by σ
+    # (normal quantiles in golden-ratio order, so the scatter is independent of the pair).
+    idx = _resampled_index(w.ravel(), DRAWS)
+    i_s, i_g = np.unravel_index(idx, w.shape)
+    scatter = np.exp(sigma * ndtri(np.mod(0.5 + np.arange(DRAWS) * _GOLDEN, 1.0)))
+    per_s = sample_limits(rpm_ext, a_ext, rpm, s)
+    samples = np.minimum((g[i_g] * scatter)[:, None] * per_s[i_s], depth_cap)
+    low = np.quantile(samples, 1 - confidence, axis=0, method="inverted_cdf")
     high = np.maximum(np.quantile(samples, confidence, axis=0, method="inverted_cdf"), low)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dwidth1 = float(np.nanmedian(np.log(high / low)))
     text = (f"{sources}; weighed by {len(inside)} observed cut(s)" if sources else
             f"weighed by {len(inside)} observed cut(s)")
     band = LobeBand(rpm=rpm, a_safe=low, a_low=low, a_high=high, confidence=confidence,
-                    safe_pockets=safe_pockets(rpm, samples, confidence), sources=text, samples=len(rs))
-    return ObservedBand(prior, band, w, s, len(inside), width0, width1, shift, tuple(warnings))
+                    safe_pockets=safe_pockets(rpm, samples, confidence), sources=text, samples=DRAWS)
+    return ObservedBand(prior, band, w, s, len(inside), width0, _width(s, ws, confidence),
+                        _weighted_quantile(s, ws, 0.5) - 1.0, tuple(warnings), magnitudes=g,
+                        stiffness_width_before=gwidth0, stiffness_width_after=_width(g, wg, confidence),
+                        stiffness_shift=_weighted_quantile(g, wg, 0.5) - 1.0,
+                        depth_width_before=dwidth0, depth_width_after=dwidth1)
 
 
 def lobes_with_observations(freq_hz, phi_xx, phi_yy, *, teeth: int, ktc: float, krc: float, diameter: float, ae: float,

@@ -47,8 +47,10 @@ def test_observations_find_the_true_shift_and_narrow_the_band(central, s_true):
     # The weighted safe depth is truly stable almost everywhere; the prior's, on a shifted tool, less often.
     true = sample_limits(ext, a, RPM, [s_true])[0]
     assert np.mean(ob.band.a_safe <= true * 1.001) >= 0.95
-    # The band now holds the truth more tightly: its mean width (a_high - a_low) shrank.
-    assert np.mean(ob.band.a_high - ob.band.a_low) < 0.6 * np.mean(ob.prior.a_high - ob.prior.a_low)
+    # The band now holds the truth more tightly, though never tighter than the limit's own scatter σ
+    # (the next cut varies as the observed ones did): its mean width (a_high - a_low) shrank.
+    assert np.mean(ob.band.a_high - ob.band.a_low) < 0.8 * np.mean(ob.prior.a_high - ob.prior.a_low)
+    assert ob.depth_narrowing > 0.3
 
 
 def test_a_chatter_the_band_called_safe_is_warned_and_no_cuts_leave_the_band_as_it_was(central):
