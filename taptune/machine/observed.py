@@ -48,7 +48,7 @@ LAPSE = 0.02
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 
 
-def _log_likelihood(limits, depths, verdicts, sigma: float, lapse: float = LAPSE) -> np.ndarray:
+def _log_likelihood(limits, depths, verdicts, sigma: float, lapse: float) -> np.ndarray:
     """Log-probability of the verdicts for every row of ``limits`` (..., n_cuts) [m]: the limit
     scattered by σ (log scale), and a verdict wrong with probability ``lapse``."""
     from scipy.special import ndtr
@@ -287,7 +287,7 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
                             f"{100 * (1 - p_stable):.0f} % confidence: the model is off there")
     # Every pair (s, g): limit g s² a(n/s) at the cuts, shape (s, g, cuts).
     lim = np.minimum(g[None, :, None] * sample_limits(rpm_ext, a_ext, n_obs, s)[:, None, :], depth_cap)
-    loglik = _log_likelihood(lim, depth, verdicts, sigma)
+    loglik = _log_likelihood(lim, depth, verdicts, sigma, LAPSE)
     w = np.exp(loglik - loglik.max())
     w /= w.sum()
     ws, wg = w.sum(axis=1), w.sum(axis=0)
