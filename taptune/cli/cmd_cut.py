@@ -243,7 +243,10 @@ def _print(args, analysis, out, lobes_info) -> None:
         if s["observed_cuts_used"] and s["band_width_before_pct"] > 0:
             print(f"band:      {s['observed_cuts_used']} cut(s) of this kind narrow the holder's band of tool-point "
                   f"frequencies from {s['band_width_before_pct']:.1f} % to {s['band_width_after_pct']:.1f} % wide "
-                  f"(shifted {s['toolpoint_frequency_shift_pct']:+.1f} %)")
+                  f"(shifted {s['toolpoint_frequency_shift_pct']:+.1f} %)"
+                  + (f" and of its dynamic stiffness from {s['stiffness_band_width_before_pct']:.0f} % to "
+                     f"{s['stiffness_band_width_after_pct']:.0f} % ({s['toolpoint_stiffness_shift_pct']:+.0f} %: "
+                     "limits that much higher)" if s["stiffness_band_width_before_pct"] > 0 else ""))
 
 
 def _plot(args, analysis, lobes_info) -> None:

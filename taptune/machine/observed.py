@@ -13,16 +13,27 @@ model, the cut's own variation; :data:`SIGMA`); ``unclear`` cuts carry no weight
 sets' weights are the products over the cuts (Bayes with equal priors), and the band is
 the weighted spread of their limits per speed.
 
-In the product the sets are the samples of the holder's band (:mod:`taptune.machine.band`:
-every tool-point modal frequency × s, stiffness × s², the FRF ÷ g, limit g s² a(n/s)), so weighing them
-costs one interpolation per sample and cut. The weighted samples give the band again
-(resampled at evenly spaced quantiles of their weights: the safe depth and the safe
-pockets are then computed as without observations), how much it narrowed, and the cuts
-that contradict a prediction made with ≥ P confidence.
+In the product the sets are the holder's band (:mod:`taptune.machine.band`: every
+tool-point modal frequency × s, stiffness × s², the FRF ÷ g, limit g s² a(n/s)) on the full
+grid of its s and its g (independent, each at evenly spaced quantiles of its distribution),
+so weighing them costs one interpolation per s and cut. A verdict is taken as wrong with
+probability :data:`LAPSE` whatever the set (one misheard cut must not rule out the truth).
+The band with the cuts is the posterior predictive of the limit: pairs drawn by their
+weights, each limit scattered by σ as the cuts' were (the next cut varies as they did), so
+the safe depth (the (1 − P) quantile per speed) and the pockets are computed as without
+observations. The output says how the cuts moved and narrowed the band of s (where the
+lobes lie), of g (how deep they reach) and of the limit itself, and names the cuts that
+contradict a prediction made with ≥ P confidence.
+
+On 60 tool points drawn inside a band of ±6 % in frequency and ×/÷1.6 in dynamic stiffness,
+each with 3–15 cuts at random speeds and 0.4–2.5 × its limit, the weighed safe depth lay at
+or below the true limit at ≥ 90 % of the speeds in 55 of them (the band alone: 50), and its
+median rose from 0.62 to 0.77 of the true limit (tests/cut/test_observed_honest.py; on 300
+such tool points 276 and 248, 0.66 to 0.75).
 
 Signatures::
 
-    set_weights(limits, depths, verdicts, sigma=SIGMA) -> ndarray (n_sets,)
+    set_weights(limits, depths, verdicts, sigma=SIGMA, lapse=0.0) -> ndarray (n_sets,)
     weighted_band(a_lim, weights, quantiles=(0.05, 0.5, 0.95)) -> ndarray (len(quantiles), n_speeds)
     comparable(observations, *, teeth, ae_mm, milling, ktc_mpa, krc_mpa) -> list
     observed_band(rpm_ext, a_ext, inner, scales, cuts, confidence, depth_cap=inf, sources="",
