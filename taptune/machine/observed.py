@@ -214,6 +214,12 @@ def _width(x, w, confidence: float) -> float:
     return _weighted_quantile(x, w, (1 + confidence) / 2) - _weighted_quantile(x, w, (1 - confidence) / 2)
 
 
+def _log_width(low, high) -> float:
+    """Median over the speeds of ln(high / low), where both are finite and positive (0: nowhere)."""
+    ok = np.isfinite(low) & np.isfinite(high) & (low > 0)
+    return float(np.median(np.log(high[ok] / low[ok]))) if ok.any() else 0.0
+
+
 def resampled(scales, weights) -> np.ndarray:
     """As many factors as ``scales``, drawn at evenly spaced quantiles of the weights (systematic
     resampling, deterministic): equal-weight samples that the band's quantiles can take as they are."""
@@ -276,8 +282,7 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
     equal = np.full((s.size, g.size), 1.0 / (s.size * g.size))
     ws0, wg0 = equal.sum(axis=1), equal.sum(axis=0)
     width0, gwidth0 = _width(s, ws0, confidence), _width(g, wg0, confidence)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dwidth0 = float(np.nanmedian(np.log(prior.a_high / prior.a_low)))
+    dwidth0 = _log_width(prior.a_low, prior.a_high)
     if not inside or len(s0) == 1:
         return ObservedBand(prior, prior, equal, s, 0, width0, width0, _weighted_quantile(s, ws0, 0.5) - 1.0,
                             magnitudes=g, stiffness_width_before=gwidth0, stiffness_width_after=gwidth0,
@@ -321,8 +326,7 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
     samples = np.minimum((g[i_g] * scatter)[:, None] * per_s[i_s], depth_cap)
     low = np.quantile(samples, 1 - confidence, axis=0, method="inverted_cdf")
     high = np.maximum(np.quantile(samples, confidence, axis=0, method="inverted_cdf"), low)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dwidth1 = float(np.nanmedian(np.log(high / low)))
+    dwidth1 = _log_width(low, high)
     text = (f"{sources}; weighed by {len(inside)} observed cut(s)" if sources else
             f"weighed by {len(inside)} observed cut(s)")
     band = LobeBand(rpm=rpm, a_safe=low, a_low=low, a_high=high, confidence=confidence,

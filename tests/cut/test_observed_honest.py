@@ -64,3 +64,22 @@ def test_the_weighed_safe_depth_holds_in_nine_scenarios_of_ten_and_rises(central
     # The cuts are informative: the safe depth comes closer to the true limit, the stiffness band narrows.
     assert np.median(after) > np.median(before) + 0.05
     assert np.median(narrowed) > 0.2
+
+
+@pytest.mark.parametrize("g_true", [0.75, 1.3])
+def test_cuts_on_a_stiffer_or_softer_tool_move_and_narrow_the_stiffness_band(central, g_true):
+    s, g, ext, inner, a = central
+    rng = np.random.default_rng(7)
+    rpm = rng.uniform(RPM[0], RPM[-1], 12)
+    limit = g_true * sample_limits(ext, a, rpm, [1.0])[0]
+    depth = limit * np.exp(rng.uniform(np.log(0.5), np.log(2.0), 12))
+    cuts = [(float(r), float(d), "stable" if d < t else "chatter") for r, d, t in zip(rpm, depth, limit)]
+    ob = observed_band(ext, a, inner, s, cuts, 0.9, magnitudes=g)
+    # The weighted median g moves towards the true factor (12 cuts: 0.71 for 0.75, 1.16 for 1.3, the
+    # band's prior pulling it towards 1); its band and the limit's narrow.
+    assert np.sign(ob.stiffness_shift) == np.sign(g_true - 1)
+    assert abs(np.log1p(ob.stiffness_shift) - np.log(g_true)) < 0.15
+    assert ob.stiffness_narrowing > 0.3 and ob.depth_narrowing > 0.2
+    d = ob.to_dict()
+    assert d["toolpoint_stiffness_shift_pct"] == pytest.approx(100 * ob.stiffness_shift)
+    assert d["stiffness_band_width_after_pct"] < d["stiffness_band_width_before_pct"]
