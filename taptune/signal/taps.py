@@ -308,28 +308,38 @@ def is_double_hit(x, onset: int, sample_rate: float, window_s=(2e-3, 30e-3), ord
 
 
 def ring_time(env, onset: int, sample_rate: float, before_s=(20e-3, 1e-3), ratio: float = 2.0,
-              peak_within_s: float = 5e-3, max_s: float = 30e-3) -> float:
+              peak_within_s: float = 5e-3, max_s: float = 30e-3, gap_s: float = 4e-3) -> float:
     """How long [s] the envelope ``env`` stays above ``ratio`` times its level before the
     onset (the median over ``before_s`` before it), counted from its peak within
     ``peak_within_s`` after the onset (a lossy codec's pre-echo can trigger the onset a
-    few ms early), at most ``max_s``."""
+    few ms early), at most ``max_s``.
+
+    A 0.5 ms envelope of a low ring dips at every zero crossing (a 164 Hz ring's
+    half-period is 3 ms): only a stay below for ``gap_s`` ends the ring. That matters
+    where a tap follows the last one's ring closely (knocks 0.15 s apart), so the level
+    before it is that ring's, not the room's.
+    """
     fs = float(sample_rate)
     a, b = max(onset - int(before_s[0] * fs), 0), max(onset - int(before_s[1] * fs), 0)
     level = float(np.median(env[a:b])) if b > a else 0.0
     seg = np.asarray(env[onset:onset + int(max_s * fs)])
     k = int(np.argmax(seg[:max(int(peak_within_s * fs), 1)]))
-    below = np.flatnonzero(seg[k:] <= ratio * level)
+    w = max(int(gap_s * fs), 1)
+    ahead = np.concatenate([seg[k:], np.zeros(w - 1)])
+    fwd = np.lib.stride_tricks.sliding_window_view(ahead, w).max(axis=1)
+    below = np.flatnonzero(fwd <= ratio * level)
     return (int(below[0]) if below.size else seg.size - k) / fs
 
 
-def rings_down(env, onset: int, end: int, sample_rate: float, early_s: float = 20e-3,
+def rings_down(env, onset: int, end: int, sample_rate: float, early_s: float = 35e-3,
                min_decay_db: float = 6.0, growth_db: float = 3.0) -> bool:
     """Whether the event at ``onset`` is an impact ring: loudest just after its onset, then
     decaying.
 
     ``env`` is a 2 ms envelope. An impact puts all its energy in at once: the envelope peaks
     within ``early_s`` of the onset (a resonator tube or beating modes may swell it a
-    little, up to ``growth_db``) and has fallen by ``min_decay_db`` over the last 40 % of
+    little, up to ``growth_db``; a second strike within the double-hit window, 30 ms, may
+    be the louder one: a double hit, not a swell) and has fallen by ``min_decay_db`` over the last 40 % of
     the segment. A word grows into its vowel after a plosive, a note swells and holds, a
     machine that starts stays loud: none of them does both. Segments shorter than 60 ms
     (a tap cut off by the end of the file) are not judged.
@@ -349,7 +359,7 @@ def rings_down(env, onset: int, end: int, sample_rate: float, early_s: float = 2
 
 def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
               smooth_s: float = 0.5e-3, threshold: float = 5.0,
-              rise: float = 3.0, min_interval_s: float = 0.3, pre_onset_s: float = 2e-3,
+              rise: float = 3.0, min_interval_s: float = 0.1, pre_onset_s: float = 2e-3,
               segment_s: float = 0.25, double_hit_window_s=(2e-3, 30e-3),
               faint_db: float = 24.0, min_ring_s: float = 1.5e-3) -> list[Tap]:
     """Find every tap in a mono signal.
@@ -371,7 +381,10 @@ def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
     rise : float
         An onset also stands this many times above the envelope 3–12 ms before it.
     min_interval_s : float
-        Minimum spacing of taps [s]; a rise within it belongs to the same tap.
+        Minimum spacing of taps [s]; a rise within it belongs to the same tap, unless it
+        is ``rise`` times louder than all since (then what came first was a faint
+        precursor: a click, the noise of a gated recorder opening 0.1 s before the tap,
+        which must not swallow it). Knocks by hand come 0.14–0.3 s apart.
     pre_onset_s, segment_s : float
         Segment start before the onset and maximum segment length [s].
     double_hit_window_s : (float, float)
@@ -417,9 +430,17 @@ def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
     if sharp[0]:
         starts = np.concatenate(([0], starts))
     min_gap = int(round(min_interval_s * fs))
+    # Within min_gap a rise still starts an event of its own if it is `rise` times louder
+    # than everything since the last onset (that was a precursor: a click, a gated
+    # recorder opening 0.1 s before the tap), unless it comes within the double-hit
+    # window (a second strike of the same tap).
+    dbl_end = int(round(double_hit_window_s[1] * fs))
+    peak_n = max(int(2e-3 * fs), 1)
     onsets: list[int] = []
     for c in starts:
-        if not onsets or c - onsets[-1] >= min_gap:
+        if not onsets or c - onsets[-1] >= min_gap or (
+                c - onsets[-1] > dbl_end
+                and float(np.max(env[c:c + peak_n])) > rise * float(np.max(env[onsets[-1]:c]))):
             onsets.append(int(c))
     if not onsets:
         return []
@@ -459,3 +480,53 @@ def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
     if not any(t.used for t in taps):
         taps = [t if t.rejected else replace(t, used=True) for t in taps]
     return taps
+
+
+def sound_without_tap(mono, sample_rate: float, taps: list[Tap], *, smooth_s: float = 10e-3,
+                      threshold: float = 5.0, within_db: float = 12.0, min_s: float = 20e-3) -> list[float]:
+    """Start times [s] of loud sounds in which no event begins: speech, music, a machine.
+
+    A tap recording is quiet between its taps: every stretch where the sound stands out of
+    the noise floor (a 10 ms envelope over ``threshold`` times its 10th percentile) begins with a
+    tap's sharp onset and is its ring-down. Words, notes and a machine's bursts are
+    stretches as loud as the taps (within ``within_db`` of the loudest used tap) that
+    begin without one (they swell in); :func:`find_taps` finds at most the odd syllable
+    that starts like a tap. Stretches shorter than ``min_s`` (a click) do not count. A
+    ring whose beating modes cancel so deeply that it falls back into the noise and comes
+    back within 12 dB of its start is the one tap sound that could look alike: it needs
+    two modes matched within ~5 %, rare, and several such stretches.
+
+    Parameters
+    ----------
+    mono : ndarray, shape (n,)
+    sample_rate : float
+        [Hz].
+    taps : list of Tap
+        Every event :func:`find_taps` returned (rejected ones included: they are reported
+        on their own).
+    """
+    x = np.asarray(mono, dtype=np.float64)
+    fs = float(sample_rate)
+    used = [t for t in taps if t.used]
+    if not used or x.size < 2:
+        return []
+    env = envelope(x, fs, smooth_s)
+    # The quiet between words or taps (10th percentile): the median of speech is speech.
+    nz = env[::8][env[::8] > 0]
+    floor = float(np.percentile(nz, 10)) if nz.size else 0.0
+    loudest = max(float(np.max(env[t.onset:t.end])) for t in used if t.end > t.onset)
+    loud = np.concatenate(([False], env > max(threshold * floor, 0.0), [False]))
+    edges = np.flatnonzero(np.diff(loud.astype(np.int8)))
+    starts, stops = edges[0::2], edges[1::2]
+    # An event's onset may lie up to one smoothing length before its stretch starts.
+    lead = int(round(smooth_s * fs))
+    onsets = np.array(sorted(t.onset for t in taps))
+    out = []
+    for a, b in zip(starts, stops):
+        if b - a < min_s * fs or float(np.max(env[a:b])) < loudest * 10 ** (-within_db / 20):
+            continue
+        k = np.searchsorted(onsets, a - lead)
+        if k < onsets.size and onsets[k] < b:
+            continue
+        out.append(a / fs)
+    return out
