@@ -131,7 +131,9 @@ MANIFEST = (
     Entry("xylophone_new", "G6_ff.flac", XY, "library/Samples/G6_ff.flac", "CC0-1.0",
           "one hard strike on the G6 bar", 1, 3171.1),
     Entry("knock_materials", "Ceramic_1.m4a", KM, "Data/raw/Ceramic/1.m4a", "none stated (kept local)",
-          KM_WHAT.format("a ceramic object", "one knock"), 1, 1666.8),
+          KM_WHAT.format("a ceramic object", "a knock, then 0.19 s later a light second strike 19 dB softer "
+                         "(the envelope jumps 13 dB out of the first ring and the same 1664 Hz mode rings "
+                         "again)"), 2, 1666.8),
     Entry("knock_materials", "Ceramic_73.m4a", KM, "Data/raw/Ceramic/73.m4a", "none stated (kept local)",
           KM_WHAT.format("a ceramic object", "one knock that is a real double strike (a small one, then the "
                          "loud one 20 ms later)"), 1, 1667.0, doubles=1),
