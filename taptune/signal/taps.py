@@ -307,6 +307,33 @@ def is_double_hit(x, onset: int, sample_rate: float, window_s=(2e-3, 30e-3), ord
     return bool(top > ratio * first and top > 3.0 * float(np.median(later)) and separate and alone)
 
 
+def louder_second_strike(x, onset: int, sample_rate: float, window_s=(2e-3, 30e-3), dip_db: float = 10.0,
+                         rise: float = 3.0) -> bool:
+    """Whether a second strike louder than the first follows the onset within ``window_s`` [s].
+
+    The prediction-error test (:func:`is_double_hit`) looks for a spike standing out of
+    the first impact's ring; a second strike that is the louder one (a knock on a cup:
+    a glancing touch, then the blow 20 ms later) drowns that test in its own ring. Its
+    2 ms envelope shows it plainly: the first ring falls ``dip_db`` below its peak, then
+    jumps ``rise`` times within 3 ms to above that peak. A ring cannot do that (it only
+    decays; beating modes swell back at most to where they started), a soft tap's ragged
+    contact lasts 2-4 ms, not a 10 dB dip.
+    """
+    fs = float(sample_rate)
+    env = envelope(np.asarray(x[onset:onset + int((window_s[1] + 5e-3) * fs)], dtype=np.float64), fs, 2e-3)
+    k0 = int(window_s[0] * fs)
+    if env.size <= k0 + 1:
+        return False
+    first = float(np.max(env[:k0]))
+    later = env[k0:]
+    k = int(np.argmax(later))
+    if later[k] <= first:
+        return False
+    dip = float(np.min(later[:k + 1]))
+    before = float(np.min(later[max(k - int(3e-3 * fs), 0):k + 1]))
+    return dip < first * 10 ** (-dip_db / 20) and later[k] > rise * before
+
+
 def ring_time(env, onset: int, sample_rate: float, before_s=(20e-3, 1e-3), ratio: float = 2.0,
               peak_within_s: float = 5e-3, max_s: float = 30e-3, gap_s: float = 4e-3) -> float:
     """How long [s] the envelope ``env`` stays above ``ratio`` times its level before the
@@ -465,7 +492,7 @@ def find_taps(mono, sample_rate: float, *, raw=None, subtype: str = "FLOAT",
                 if hi[c] > lo[c]:
                     clip_level = max(clip_level, _flat_top_level(col[s0:end], hi[c], lo[c], tol[c]))
         clipped = clip_level > 0
-        dbl = is_double_hit(x, on, fs, double_hit_window_s)
+        dbl = is_double_hit(x, on, fs, double_hit_window_s) or louder_second_strike(x, on, fs, double_hit_window_s)
         taps.append(Tap(onset=on, time_s=on / fs, end=end, peak=peak, snr_db=float(snr),
                         clipped=clipped, double_hit=dbl, used=not (clipped or dbl), clip_level=clip_level))
     taps = [t if rings_down(envelope(x[t.onset:t.end], fs, 2e-3), 0, t.end - t.onset, fs)

@@ -334,7 +334,7 @@ def test_a_louder_second_strike_20_ms_later_is_a_tap_not_a_swell():
     y = struck(force, cup, FS, 0.5)
     x[int(0.3 * FS):int(0.3 * FS) + y.size] += 0.5 * y / np.max(np.abs(y))
     taps = _taps(x)
-    assert len(taps) == 1 and not taps[0].rejected and taps[0].used
+    assert len(taps) == 1 and not taps[0].rejected and taps[0].used and taps[0].double_hit
 
 
 def _sentence(seed):
