@@ -352,9 +352,10 @@ def ring_time(env, onset: int, sample_rate: float, before_s=(20e-3, 1e-3), ratio
     seg = np.asarray(env[onset:onset + int(max_s * fs)])
     k = int(np.argmax(seg[:max(int(peak_within_s * fs), 1)]))
     w = max(int(gap_s * fs), 1)
-    ahead = np.concatenate([seg[k:], np.zeros(w - 1)])
-    fwd = np.lib.stride_tricks.sliding_window_view(ahead, w).max(axis=1)
-    below = np.flatnonzero(fwd <= ratio * level)
+    # First i with the envelope at or below the level over all of [i, i + w) (past the end counts as below).
+    above = np.concatenate([np.asarray(seg[k:]) > ratio * level, np.zeros(w - 1, dtype=bool)])
+    run = np.concatenate(([0], np.cumsum(above)))
+    below = np.flatnonzero(run[w:] - run[:-w] == 0)
     return (int(below[0]) if below.size else seg.size - k) / fs
 
 
@@ -535,25 +536,28 @@ def sound_without_tap(mono, sample_rate: float, taps: list[Tap], *, smooth_s: fl
     x = np.asarray(mono, dtype=np.float64)
     fs = float(sample_rate)
     used = [t for t in taps if t.used]
-    if not used or x.size < 2:
+    # On 1 ms blocks: a 10 ms envelope needs no finer grid (and costs 1/50 of the time).
+    blk = max(int(1e-3 * fs), 1)
+    nb = x.size // blk
+    if not used or nb < 2:
         return []
-    env = envelope(x, fs, smooth_s)
+    n_avg = max(int(round(smooth_s / 1e-3)), 1)
+    env = np.convolve(np.abs(x[:nb * blk]).reshape(nb, blk).mean(axis=1), np.ones(n_avg) / n_avg, "same")
     # The quiet between words or taps (10th percentile): the median of speech is speech.
-    nz = env[::8][env[::8] > 0]
+    nz = env[env > 0]
     floor = float(np.percentile(nz, 10)) if nz.size else 0.0
-    loudest = max(float(np.max(env[t.onset:t.end])) for t in used if t.end > t.onset)
-    loud = np.concatenate(([False], env > max(threshold * floor, 0.0), [False]))
+    loudest = max(float(np.max(env[t.onset // blk:max(t.end // blk, t.onset // blk + 1)])) for t in used)
+    loud = np.concatenate(([False], env > threshold * floor, [False]))
     edges = np.flatnonzero(np.diff(loud.astype(np.int8)))
     starts, stops = edges[0::2], edges[1::2]
     # An event's onset may lie up to one smoothing length before its stretch starts.
-    lead = int(round(smooth_s * fs))
-    onsets = np.array(sorted(t.onset for t in taps))
+    onsets = np.array(sorted(t.onset // blk for t in taps))
     out = []
     for a, b in zip(starts, stops):
-        if b - a < min_s * fs or float(np.max(env[a:b])) < loudest * 10 ** (-within_db / 20):
+        if (b - a) * 1e-3 < min_s or float(np.max(env[a:b])) < loudest * 10 ** (-within_db / 20):
             continue
-        k = np.searchsorted(onsets, a - lead)
+        k = np.searchsorted(onsets, a - n_avg)
         if k < onsets.size and onsets[k] < b:
             continue
-        out.append(a / fs)
+        out.append(a * blk / fs)
     return out
