@@ -350,8 +350,9 @@ def band_from_prediction(prediction, mode: int = 0) -> tuple[float, float, str, 
                       for name, key in (("near-optimal parameter sets", "set_hz"),
                                         ("geometry tolerances", "geometry_hz"), ("model form", "model_form_hz")))
     text = (f"tool-point modal frequencies ±{100 * rel:.1f} % (the holder's prediction band of f{m + 1} = "
-            f"{f:.0f} Hz: {parts}) and dynamic stiffness ±{100 * depth:.0f} % (damping the near-optimal sets "
-            f"disagree on ±{100 * damping:.0f} %, model form ±{100 * DEPTH_MODEL_FORM:.0f} %), "
+            f"{f:.0f} Hz: {parts}) and dynamic stiffness ×/÷ {1 + depth:.2f}, i.e. −{100 * depth / (1 + depth):.0f} % "
+            f"to +{100 * depth:.0f} % (damping the near-optimal sets disagree by up to {100 * damping:.0f} %, "
+            f"model form ×/÷ {1 + DEPTH_MODEL_FORM:.2f}), "
             f"{100 * band.coverage:.0f} % bands; {SAMPLES} sampled tool points, each with its modes × s in "
             f"frequency and × s² in stiffness and its FRF ÷ g")
     return float(rel), float(band.coverage), text, depth
@@ -367,13 +368,41 @@ def lobes_with_band(freq_hz, phi_xx, phi_yy, *, teeth: int, ktc: float, krc: flo
     :func:`band_from_tolerance` give it. The central lobes
     are computed once on the grid extended to n/s of every sample (:func:`extended_grid`).
     """
-    from taptune.machine.lobes import stability_lobes
-
     check_confidence(confidence)
     rel, coverage, sources, depth = band_parts(band)
     scales, magnitudes = band_samples(rel, coverage, depth)
     ext, inner = extended_grid(rpm, scales)
-    wide = stability_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
-                           milling=milling, rpm=ext, method=method, depth_cap=depth_cap, modes=modes)
+    wide = central_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
+                         milling=milling, rpm=ext, method=method, depth_cap=depth_cap, modes=modes,
+                         scales=scales, magnitudes=magnitudes)
     lobes = wide.on(inner)
     return lobes, lobe_band(ext, wide.a_lim, inner, scales, confidence, depth_cap, sources, magnitudes)
+
+
+def search_cap(depth_cap: float, scales, magnitudes=None) -> float:
+    """The depth [m] up to which the central lobes must be searched so that every sample's
+    limit g·s²·a(n/s) is known up to ``depth_cap``: ``depth_cap`` / min(g·s²).
+
+    A central limit cut off at the cap ("stable to the cap") says nothing about a sample
+    softer than the centre (g·s² < 1), whose limit may lie below the cap."""
+    s = np.asarray(scales, dtype=float)
+    g = np.ones_like(s) if magnitudes is None else np.asarray(magnitudes, dtype=float)
+    return float(depth_cap / min(1.0, float(np.min(g * s**2))))
+
+
+def central_lobes(freq_hz, phi_xx, phi_yy, *, depth_cap: float, scales, magnitudes=None, **cut):
+    """The central lobes (:func:`taptune.machine.lobes.stability_lobes` with ``cut``) searched
+    to :func:`search_cap`, reported with ``depth_cap``: the band's samples scale them and
+    are capped only after scaling."""
+    from dataclasses import replace
+
+    from taptune.machine.lobes import stability_lobes
+
+    top = search_cap(depth_cap, scales, magnitudes)
+    wide = stability_lobes(freq_hz, phi_xx, phi_yy, depth_cap=top, **cut)
+    a = wide.a_lim
+    if np.isfinite(top):
+        # "Stable to the search cap" is a limit of at least that: kept as the cap's value, a
+        # sample between such a speed and its neighbour interpolates below the truth, never above.
+        a = np.where(np.isposinf(a), top, a)
+    return replace(wide, a_lim=a, depth_cap=float(depth_cap))

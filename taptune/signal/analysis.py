@@ -22,7 +22,7 @@ from taptune.signal.peaks import (FIT_STARTS_S, Peak, harmonic_fundamental, leak
                                   pick_peaks, refine_peaks, tap_scatter)
 from taptune.signal.spectrum import (fade_out, fft_length, noise_segments, smooth_floor, spectra,
                                      tap_segments, window_leakage_db)
-from taptune.signal.taps import NEAR_FULL_SCALE, Tap, find_taps, full_scale_runs, to_mono
+from taptune.signal.taps import NEAR_FULL_SCALE, Tap, find_taps, full_scale_runs, sound_without_tap, to_mono
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,8 @@ class SpectrumOptions:
     #: Onset threshold over the median envelope. 5x: a 0.5 ms envelope of Gaussian noise
     #: stays below ~1.7x its median, and taps at 20 dB SNR still clear it.
     tap_threshold: float = 5.0
-    min_tap_interval_s: float = 0.3
+    #: Knocks by hand come 0.14-0.3 s apart (see ``taps.find_taps``).
+    min_tap_interval_s: float = 0.1
     #: An event this far below the loudest tap is no tap (a thump, a click, a codec's
     #: pre-echo): taps by hand vary by up to ~20 dB (see ``taps.find_taps``).
     faint_event_db: float = 24.0
@@ -261,7 +262,8 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
     -------
     dict
         ``taps, used, freq, tap_mag, mag, noise_mag``; ``rejected`` (the events that are
-        no tap: faint, or without a ring-down); ``peaks`` (list of Peak, kind
+        no tap: faint, or without a ring-down); ``untapped`` (start times [s] of loud
+        sounds without a tap's onset, :func:`~taptune.signal.taps.sound_without_tap`); ``peaks`` (list of Peak, kind
         "other", ascending), ``idx`` (their bins), ``over`` (their height over the floor
         [dB]), ``floor`` (the smoothed noise floor), ``top_db``, ``oversample`` (FFT bins per
         native bin of a tap segment), ``stationary`` (list of bool) and
@@ -308,6 +310,7 @@ def find_spectral_peaks(rec: Recording, o: SpectrumOptions = SpectrumOptions()) 
                 for k, q in enumerate(peaks_in)]
 
     return {"taps": taps, "rejected": [t for t in events if t.rejected], "used": used, "freq": freq,
+            "untapped": sound_without_tap(mono, fs, events),
             "tap_mag": tap_mag, "mag": mag, "noise_mag": noise_mag, "peaks": peaks, "idx": idx, "over": over, "floor": floor,
             "top_db": top, "oversample": 2 * (freq.size - 1) / n_disp,
             "stationary": [bool(v) for v in stationary], "refine": refine, "leak_reach_hz": 40 * fs / shortest}
@@ -472,6 +475,13 @@ def analyse_recording(recording: Recording, interface: str | None = "HSK-A63", e
         raise InputError(f"{name}: no spectral peak stands out of the noise" + (f": {why}" if why else ""))
     # What reading found (a WAV cut short) first, then the taps'.
     warnings = list(recording.warnings) + _tap_warnings(r["taps"], name, o, r.get("rejected", ()))
+    untapped = r.get("untapped", ())
+    if len(untapped) >= max(2, len(r["used"])):
+        # More loud sounds swell in than taps start sharply: words, notes, a machine.
+        warnings.append(f"{name}: does not look like a tap: {len(untapped)} loud sounds (at "
+                        f"{', '.join(f'{t:.2f}' for t in untapped[:5])}{' …' if len(untapped) > 5 else ''} s) "
+                        "swell in without a tap's sharp onset (speech, music or a running machine?); "
+                        "record taps on the tool tip in a quiet moment")
     pitch = harmonic_fundamental([q.hz for q in peaks], [q.level_db for q in peaks])
     if pitch is not None:
         warnings.append(f"{name}: does not look like a tap: the loud peaks form a harmonic series on {pitch:.0f} Hz "

@@ -123,3 +123,23 @@ def test_a_band_of_three_has_no_stiffness_part_and_the_damping_spread_adds_in_qu
     assert np.mean((g > 1 / 1.3) & (g < 1.3)) == pytest.approx(0.9, abs=0.04)
     s1, g1 = band_samples(0.02, 0.9, 0.0)
     np.testing.assert_array_equal(g1, 1.0)
+
+
+def test_a_depth_cap_only_cuts_the_band_it_does_not_hide_softer_samples():
+    """The central lobes stable up to the flute length say nothing of a softer sample
+    (g·s² < 1), whose limit lies below it: with a cap the band must equal the uncapped band,
+    then capped. 1-DOF tool (922 Hz, Insperger & Stépán 2004's benchmark) slotting with 4
+    teeth, a constant-force cut whose limit has one branch per speed."""
+    mode = ModalSet([922.0], [0.011], [1.34e6])
+    f = np.arange(100.0, 3000.0, 0.5)
+    cut = dict(teeth=4, ktc=6e8, krc=2e8, diameter=20e-3, ae=20e-3, milling="down")
+    rpm = np.arange(12000.0, 15000.0, 100.0)
+    band = (0.01, 0.9, "test", 0.6)
+    res = {}
+    for cap in (0.3e-3, np.inf):
+        _, b = lobes_with_band(f, mode.frf(f), mode.frf(f), rpm=rpm, method="sdm", depth_cap=cap, band=band,
+                               modes=(mode, mode), **cut)
+        res[cap] = b.a_safe
+    capped, free = res[0.3e-3], np.minimum(res[np.inf], 0.3e-3)
+    assert (free < 0.3e-3).any() and (res[np.inf] > 0.3e-3).any()  # the cap bites somewhere, not everywhere
+    np.testing.assert_allclose(capped, free, rtol=2e-3)

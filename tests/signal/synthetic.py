@@ -57,21 +57,33 @@ def machinery(seed=0, fs=48000, seconds=3.0, level=0.3):
     return level * x / np.max(np.abs(x))
 
 
-def speech_like(seed=0, fs=48000, seconds=3.0, level=0.3):
-    """Voiced syllables (a 120 Hz glottal pulse train through three formants, 4 per
-    second, 60-200 ms each) with a plosive burst before some of them, over room noise."""
+def speech_like(seed=0, fs=48000, seconds=3.0, level=0.3, f0_hz=(120.0, 120.0), attack_s=None,
+                spacing_s=0.25, length_s=(0.06, 0.2)):
+    """Voiced syllables (a glottal pulse train through three formants, 4 per second,
+    60-200 ms each) with a plosive burst before some of them, over room noise. Each
+    syllable's pitch is drawn from ``f0_hz`` (low, high) [Hz] and glides by up to ±15 %
+    over it, as a voice's does (the default: a monotone 120 Hz). ``attack_s``: the vowels
+    swell in over this raised-cosine rise [s], as real ones do over 20-50 ms (default: a
+    sin^0.5 rise, sharp). Syllables start every ``spacing_s`` and last ``length_s`` (low,
+    high) [s]: connected speech runs them into each other."""
     rng = np.random.default_rng(seed)
     n = int(fs * seconds)
     x = rng.normal(0, 1e-3, n)
     f = np.fft.rfftfreq(n, 1 / fs)
-    pulses = np.zeros(n)
-    pulses[::int(fs / 120)] = 1.0
     formants = sum(1 / (1 + ((f - fc) / bw) ** 2) for fc, bw in ((700, 90), (1200, 110), (2600, 160)))
-    voiced = np.fft.irfft(np.fft.rfft(pulses) * formants, n)
-    starts = np.arange(0.2, seconds - 0.3, 0.25)
+    starts = np.arange(0.2, seconds - 0.3, spacing_s)
     for start in starts + rng.uniform(-0.03, 0.03, starts.size):
-        a, length = int(start * fs), int(rng.uniform(0.06, 0.2) * fs)
+        a, length = int(start * fs), int(rng.uniform(*length_s) * fs)
+        f0 = rng.uniform(*f0_hz)
+        glide = f0 * (1 + rng.uniform(-0.15, 0.15) * np.linspace(0, 1, length)) if f0_hz[1] > f0_hz[0] \
+            else np.full(length, f0)
+        pulses = np.zeros(n)
+        pulses[a + np.flatnonzero(np.diff(np.floor(np.cumsum(glide) / fs)) > 0)] = 1.0
+        voiced = np.fft.irfft(np.fft.rfft(pulses) * formants, n)
         env = np.sin(np.pi * np.arange(length) / length) ** 0.5
+        if attack_s:
+            rise = min(int(attack_s * fs), length // 2)
+            env[:rise] *= 0.5 - 0.5 * np.cos(np.pi * np.arange(rise) / rise)
         x[a:a + length] += voiced[a:a + length] / np.max(np.abs(voiced)) * env
         if rng.random() < 0.5:  # a plosive: a short noise burst just before the vowel
             b = a - int(0.02 * fs)
