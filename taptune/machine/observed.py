@@ -351,14 +351,14 @@ def lobes_with_observations(freq_hz, phi_xx, phi_yy, *, teeth: int, ktc: float, 
     -------
     (taptune.machine.lobes.Lobes, ObservedBand)
     """
-    from taptune.machine.band import NO_BAND, band_parts, band_samples, check_confidence, extended_grid
-    from taptune.machine.lobes import stability_lobes
+    from taptune.machine.band import NO_BAND, band_parts, band_samples, central_lobes, check_confidence, extended_grid
 
     check_confidence(confidence)
     rel, coverage, sources, depth = band_parts(band if band is not None else (0.0, 0.9, NO_BAND))
     scales, magnitudes = band_samples(rel, coverage, depth)
     ext, inner = extended_grid(rpm, scales)
-    wide = stability_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
-                           milling=milling, rpm=ext, method=method, depth_cap=depth_cap, modes=modes)
+    wide = central_lobes(freq_hz, phi_xx, phi_yy, teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae,
+                         milling=milling, rpm=ext, method=method, depth_cap=depth_cap, modes=modes,
+                         scales=scales, magnitudes=magnitudes)
     return wide.on(inner), observed_band(ext, wide.a_lim, inner, scales, cuts, confidence, depth_cap, sources,
                                          magnitudes=magnitudes)
