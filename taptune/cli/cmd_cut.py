@@ -245,8 +245,8 @@ def _print(args, analysis, out, lobes_info) -> None:
                   f"frequencies from {s['band_width_before_pct']:.1f} % to {s['band_width_after_pct']:.1f} % wide "
                   f"(shifted {s['toolpoint_frequency_shift_pct']:+.1f} %)"
                   + (f" and of its dynamic stiffness from {s['stiffness_band_width_before_pct']:.0f} % to "
-                     f"{s['stiffness_band_width_after_pct']:.0f} % ({s['toolpoint_stiffness_shift_pct']:+.0f} %: "
-                     "limits that much higher)" if s["stiffness_band_width_before_pct"] > 0 else ""))
+                     f"{s['stiffness_band_width_after_pct']:.0f} % wide (limits {s['toolpoint_stiffness_shift_pct']:+.0f} %)"
+                     if s["stiffness_band_width_before_pct"] > 0 else ""))
 
 
 def _plot(args, analysis, lobes_info) -> None:
