@@ -107,6 +107,12 @@ PARALLEL_WORK = 2e5
 ISLAND_RATIO = 1.3
 #: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
+#: A Hopf limit is checked for a flip band below it when a multiplier at its last stable depth
+#: reaches within this of −1 along the negative real axis …
+FLIP_NEAR = 0.2
+#: … at these multiples of that depth (rounds: a limit found again lower is checked again).
+FLIP_LEVELS = (0.92, 0.84, 0.76, 0.68, 0.6)
+FLIP_PASSES = 2
 #: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
 #: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
 ARNOLDI_MIN = 32
@@ -351,18 +357,26 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
 
 
-def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
+def _critical(phi, flip_branch: bool = False):
     """(largest |μ|, that μ) of each monodromy matrix: all eigenvalues of small matrices, the
     dominant Ritz value of ``ARNOLDI_STEPS`` Arnoldi steps for large ones (the history's
     multipliers crowd near zero, the few near the unit circle converge first); a Ritz value
-    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues."""
+    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues.
+    ``flip_branch``: also −min Re μ over the same eigenvalues (Ritz values), how far the
+    flip branch reaches along the negative real axis (continuous in depth, also where two
+    real multipliers meet and turn into a complex pair)."""
     if phi.shape[-1] < ARNOLDI_MIN:
-        return _largest(np.linalg.eigvals(phi))
-    mu, res = _arnoldi(phi, ARNOLDI_STEPS)
+        ev = np.linalg.eigvals(phi)
+        rho, mu = _largest(ev)
+        return (rho, mu, -ev.real.min(axis=-1)) if flip_branch else (rho, mu)
+    mu, res, ritz = _arnoldi(phi, ARNOLDI_STEPS)
+    neg = -ritz.real.min(axis=-1)
     bad = ~(res < ARNOLDI_TOL)
     if bad.any():
-        mu[bad] = _largest(np.linalg.eigvals(phi[bad]))[1]
-    return np.abs(mu), mu
+        ev = np.linalg.eigvals(phi[bad])
+        mu[bad] = _largest(ev)[1]
+        neg[bad] = -ev.real.min(axis=-1)
+    return (np.abs(mu), mu, neg) if flip_branch else (np.abs(mu), mu)
 
 
 def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
@@ -371,10 +385,11 @@ def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(top), top
 
 
-def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """Dominant Ritz value of ``m`` Arnoldi steps on each matrix (b, n, n) and its relative
+def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Dominant Ritz value of ``m`` Arnoldi steps on each matrix (b, n, n), its relative
     residual |h_{m+1,m} y_m| / |μ| (Saad 2011, Numerical Methods for Large Eigenvalue
-    Problems, § 6.2); classical Gram–Schmidt done twice keeps the basis orthogonal."""
+    Problems, § 6.2) and all Ritz values (b, m); classical Gram–Schmidt done twice keeps the
+    basis orthogonal."""
     b, n, _ = phi.shape
     m = min(m, n - 1)
     basis = np.zeros((b, m + 1, n))
@@ -402,7 +417,7 @@ def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
         i = np.argmax(np.abs(ritz), axis=-1)
         mu, y = ritz[np.arange(b), i], vec[np.arange(b), :, i]
     res = np.abs(hess[:, m, m - 1] * y[:, m - 1]) / np.maximum(np.abs(mu), 1e-300)
-    return mu, res
+    return mu, res, ritz
 
 
 def _check_teeth(teeth) -> None:
@@ -731,25 +746,25 @@ def _growth_batch(cols, geom, teeth, ktc, krc, tau, depth, plan) -> np.ndarray:
     return _critical(_monodromy(_steps(cols, geom, teeth, ktc, krc, tau, plan), depth, plan))[0]
 
 
-def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
-    """Limiting depth per speed: bracket from ``start`` by growing factors (2, 4, 16 … cold; 1.04,
-    1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|."""
-    b = tau.size
+def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
+    """Bracket and regula falsi of :func:`_search`: (lo, hi, log|μ| at each, μ at hi, the flip
+    branch −min Re μ at lo)."""
+    b = start.size
     lo = np.zeros(b)  # largest depth known stable
     hi = np.full(b, np.inf)  # smallest known unstable
     glo = np.full(b, np.nan)  # log|μ| at lo (NaN: at zero depth, not evaluated)
     ghi = np.full(b, np.nan)
     mu_hi = np.full(b, np.nan + 0j)
+    neg = np.full(b, np.nan)
     grow = np.full(b, 1.04 if warm else 2.0)
     trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
-    steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
     for _ in range(60):
         act = np.flatnonzero(~done)
         if act.size == 0:
             break
-        rho, mu = _critical(_monodromy(steps.take(act), trial[act], plan))
+        rho, mu, ng = _critical(_monodromy(steps.take(act), trial[act], plan), flip_branch=True)
         g = np.log(rho)
         unstable = g >= 0
         for sel, is_unst in ((act[unstable], True), (act[~unstable], False)):
@@ -757,7 +772,7 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             if is_unst:
                 hi[sel], ghi[sel], mu_hi[sel] = trial[sel], gs, mu[unstable]
             else:
-                lo[sel], glo[sel] = trial[sel], gs
+                lo[sel], glo[sel], neg[sel] = trial[sel], gs, ng[~unstable]
         # Next trial depth.
         nxt = trial.copy()
         for j in act:
@@ -793,6 +808,35 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             nxt[j] = np.exp(x)
             side[j] = 1 if trial[j] == hi[j] else -1
         trial = nxt
+    return lo, hi, glo, ghi, mu_hi, neg
+
+
+def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
+    """Limiting depth per speed: bracket from ``start`` by growing factors (2, 4, 16 … cold; 1.04,
+    1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|
+    (:func:`_bracket`). Where lobes meet, a flip lobe can leave a short unstable band below
+    a Hopf crossing that the bracket stepped over: a Hopf limit whose last stable depth still
+    has a multiplier within FLIP_NEAR of −1 along the negative real axis (the flip branch,
+    which left and re-entered the unit circle, or is about to turn complex) is checked at
+    FLIP_LEVELS × that depth, and searched again downward from the lowest that chatters."""
+    steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
+    lo, hi, glo, ghi, mu_hi, neg = _bracket(steps, plan, start, depth_cap, warm)
+    levels = np.asarray(FLIP_LEVELS)
+    for _ in range(FLIP_PASSES):
+        check = np.flatnonzero(np.isfinite(hi) & ~_is_flip(mu_hi) & (neg >= 1 - FLIP_NEAR))
+        if check.size == 0:
+            break
+        depths = lo[check][:, None] * levels
+        rho = _critical(_monodromy(steps.take(np.repeat(check, levels.size)), depths.ravel(), plan))[0]
+        unstable = rho.reshape(check.size, levels.size) >= 1.0
+        redo = unstable.any(axis=1)
+        if not redo.any():
+            break
+        idx = check[redo]
+        lowest = depths[redo][np.arange(idx.size), levels.size - 1 - np.argmax(unstable[redo][:, ::-1], axis=1)]
+        out = _bracket(steps.take(idx), plan, lowest, depth_cap, True)
+        for arr, new in zip((lo, hi, glo, ghi, mu_hi, neg), out):
+            arr[idx] = new
     # Inside the final bracket: the root of log|μ| interpolated linearly in log a (the bracket's
     # geometric mean where a side's value is missing).
     with np.errstate(all="ignore"):
@@ -801,7 +845,7 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         x = np.where(np.isfinite(x) & (x >= xl) & (x <= xh), x, 0.5 * (xl + xh))
         out = np.where(np.isfinite(hi), np.exp(x), np.inf)
     out = np.where(np.isfinite(hi) & (lo == 0), hi, out)
-    flip = np.isfinite(hi) & (mu_hi.real < 0) & (np.abs(mu_hi.imag) <= 1e-3 * np.abs(mu_hi))
+    flip = np.isfinite(hi) & _is_flip(mu_hi)
     # Chatter frequency: the multiplier's angle θ gives f = (θ/2π + k)/T; the k nearest a mode is kept.
     theta = np.abs(np.angle(mu_hi))
     chatter = np.full(tau.size, np.nan)
@@ -815,6 +859,11 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         dist = np.min(np.abs(cand[:, :, None] - fm[None, None, :]) / fm[None, None, :], axis=2)
         chatter[fin] = cand[np.arange(cand.shape[0]), np.argmin(dist, axis=1)]
     return out, flip, chatter
+
+
+def _is_flip(mu) -> np.ndarray:
+    """Whether multipliers are real and negative (period doubling)."""
+    return (mu.real < 0) & (np.abs(mu.imag) <= 1e-3 * np.abs(mu))
 
 
 def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLobes:

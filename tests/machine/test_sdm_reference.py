@@ -115,12 +115,20 @@ def test_sdm_covers_a_wide_cut_at_low_speed():
     assert list(flip) == [k == "flip" for k in want.kind]
 
 
-@pytest.mark.xfail(reason="sdm_lobes steps over a flip island below a Hopf crossing where two lobes meet "
-                          "(limit 3.96 mm, true 2.81 mm)", strict=False)
-def test_sdm_finds_the_flip_island_where_lobes_meet():
-    """1-DOF benchmark, a/D 0.1 up-milling, 8,500 rpm: depths from 2.81 mm chatter (flip)."""
-    cut = _cut(BENCH_CUT, 2, 0.1, "up")
-    want = ref.limits(BENCH_MODES, cut, [8500.0], **RES)
-    a, flip, _, _ = taptune_sdm(BENCH_MODES, cut, np.array([8500.0]))
-    assert a[0] == pytest.approx(want.a_lim[0], rel=0.03)
-    assert bool(flip[0]) == (want.kind[0] == "flip")
+ISLANDS = [
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, 8500.0),  # Hopf at 3.96 mm stepped over flip from 2.81 mm
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, 11750.0),  # 3.72 mm against 2.49 mm
+    ("x ≠ y", ASYM_MODES, MILL_CUT, 0.1, 23250.0),  # 33.6 mm against 25.4 mm
+]
+
+
+@pytest.mark.parametrize("name, modes, tool, ratio, rpm", ISLANDS, ids=[f"{c[0]}-{c[4]:.0f}" for c in ISLANDS])
+def test_sdm_finds_the_flip_island_where_lobes_meet(name, modes, tool, ratio, rpm):
+    """2 teeth, up-milling: where a flip lobe meets a Hopf lobe, depths in a band below the
+    Hopf crossing chatter (flip); the limit is the band's lower edge, as the reference finds it."""
+    cut = _cut(tool, 2, ratio, "up")
+    want = ref.limits(modes, cut, [rpm], **RES)
+    speeds = np.arange(rpm - 500.0, rpm + 501.0, 250.0)  # on a grid, as the lobes are computed
+    a, flip, _, _ = taptune_sdm(modes, cut, speeds)
+    assert a[2] == pytest.approx(want.a_lim[0], rel=0.03)
+    assert bool(flip[2]) == (want.kind[0] == "flip")
