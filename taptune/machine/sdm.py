@@ -108,10 +108,12 @@ ISLAND_RATIO = 1.3
 #: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
 #: A Hopf limit is checked for a flip band below it when a multiplier at its last stable depth
-#: reaches within this of −1 along the negative real axis …
+#: reaches within FLIP_NEAR of −1 along the negative real axis, a flip limit for a Hopf band
+#: when a complex multiplier there lies within HOPF_NEAR of the unit circle …
 FLIP_NEAR = 0.2
+HOPF_NEAR = 0.1
 #: … at these multiples of that depth (rounds: a limit found again lower is checked again).
-FLIP_LEVELS = (0.92, 0.84, 0.76, 0.68, 0.6)
+CHECK_LEVELS = tuple(0.92 ** np.arange(1, 10))
 FLIP_PASSES = 2
 #: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
 #: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
@@ -357,26 +359,31 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
 
 
-def _critical(phi, flip_branch: bool = False):
+def _critical(phi, branches: bool = False):
     """(largest |μ|, that μ) of each monodromy matrix: all eigenvalues of small matrices, the
     dominant Ritz value of ``ARNOLDI_STEPS`` Arnoldi steps for large ones (the history's
     multipliers crowd near zero, the few near the unit circle converge first); a Ritz value
     whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues.
-    ``flip_branch``: also −min Re μ over the same eigenvalues (Ritz values), how far the
-    flip branch reaches along the negative real axis (continuous in depth, also where two
-    real multipliers meet and turn into a complex pair)."""
+    ``branches``: also, from the same eigenvalues (Ritz values), how far the flip branch
+    reaches along the negative real axis (−min Re μ: continuous in depth, also where two real
+    multipliers meet and turn into a complex pair) and the largest |μ| that is not real and
+    negative (the Hopf branch)."""
     if phi.shape[-1] < ARNOLDI_MIN:
         ev = np.linalg.eigvals(phi)
         rho, mu = _largest(ev)
-        return (rho, mu, -ev.real.min(axis=-1)) if flip_branch else (rho, mu)
-    mu, res, ritz = _arnoldi(phi, ARNOLDI_STEPS)
-    neg = -ritz.real.min(axis=-1)
+        return (rho, mu, *_branches(ev)) if branches else (rho, mu)
+    mu, res, ev = _arnoldi(phi, ARNOLDI_STEPS)
     bad = ~(res < ARNOLDI_TOL)
     if bad.any():
-        ev = np.linalg.eigvals(phi[bad])
-        mu[bad] = _largest(ev)[1]
-        neg[bad] = -ev.real.min(axis=-1)
-    return (np.abs(mu), mu, neg) if flip_branch else (np.abs(mu), mu)
+        ev = ev if ev.shape[-1] >= phi.shape[-1] else np.pad(ev, ((0, 0), (0, phi.shape[-1] - ev.shape[-1])))
+        ev[bad] = np.linalg.eigvals(phi[bad])
+        mu[bad] = _largest(ev[bad])[1]
+    return (np.abs(mu), mu, *_branches(ev)) if branches else (np.abs(mu), mu)
+
+
+def _branches(ev) -> tuple[np.ndarray, np.ndarray]:
+    """(−min Re μ, largest |μ| not real and negative) of each row of eigenvalues."""
+    return -ev.real.min(axis=-1), np.max(np.where(_is_flip(ev), 0.0, np.abs(ev)), axis=-1)
 
 
 def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
@@ -747,8 +754,8 @@ def _growth_batch(cols, geom, teeth, ktc, krc, tau, depth, plan) -> np.ndarray:
 
 
 def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
-    """Bracket and regula falsi of :func:`_search`: (lo, hi, log|μ| at each, μ at hi, the flip
-    branch −min Re μ at lo)."""
+    """Bracket and regula falsi of :func:`_search`: (lo, hi, log|μ| at each, μ at hi, and at lo
+    the flip and Hopf branches of :func:`_critical`)."""
     b = start.size
     lo = np.zeros(b)  # largest depth known stable
     hi = np.full(b, np.inf)  # smallest known unstable
@@ -756,6 +763,7 @@ def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
     ghi = np.full(b, np.nan)
     mu_hi = np.full(b, np.nan + 0j)
     neg = np.full(b, np.nan)
+    cplx = np.full(b, np.nan)
     grow = np.full(b, 1.04 if warm else 2.0)
     trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
@@ -764,7 +772,7 @@ def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
         act = np.flatnonzero(~done)
         if act.size == 0:
             break
-        rho, mu, ng = _critical(_monodromy(steps.take(act), trial[act], plan), flip_branch=True)
+        rho, mu, ng, cx = _critical(_monodromy(steps.take(act), trial[act], plan), branches=True)
         g = np.log(rho)
         unstable = g >= 0
         for sel, is_unst in ((act[unstable], True), (act[~unstable], False)):
@@ -772,7 +780,7 @@ def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
             if is_unst:
                 hi[sel], ghi[sel], mu_hi[sel] = trial[sel], gs, mu[unstable]
             else:
-                lo[sel], glo[sel], neg[sel] = trial[sel], gs, ng[~unstable]
+                lo[sel], glo[sel], neg[sel], cplx[sel] = trial[sel], gs, ng[~unstable], cx[~unstable]
         # Next trial depth.
         nxt = trial.copy()
         for j in act:
@@ -808,22 +816,24 @@ def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
             nxt[j] = np.exp(x)
             side[j] = 1 if trial[j] == hi[j] else -1
         trial = nxt
-    return lo, hi, glo, ghi, mu_hi, neg
+    return lo, hi, glo, ghi, mu_hi, neg, cplx
 
 
 def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
     """Limiting depth per speed: bracket from ``start`` by growing factors (2, 4, 16 … cold; 1.04,
     1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|
-    (:func:`_bracket`). Where lobes meet, a flip lobe can leave a short unstable band below
-    a Hopf crossing that the bracket stepped over: a Hopf limit whose last stable depth still
+    (:func:`_bracket`). Where lobes meet, one kind can leave a short unstable band below the
+    other's crossing that the bracket stepped over: a Hopf limit whose last stable depth still
     has a multiplier within FLIP_NEAR of −1 along the negative real axis (the flip branch,
-    which left and re-entered the unit circle, or is about to turn complex) is checked at
-    FLIP_LEVELS × that depth, and searched again downward from the lowest that chatters."""
+    which left and re-entered the unit circle, or is about to turn complex), or a flip limit
+    with a complex multiplier within HOPF_NEAR of the circle there, is checked at
+    CHECK_LEVELS × that depth, and searched again downward from the lowest that chatters."""
     steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
-    lo, hi, glo, ghi, mu_hi, neg = _bracket(steps, plan, start, depth_cap, warm)
-    levels = np.asarray(FLIP_LEVELS)
+    lo, hi, glo, ghi, mu_hi, neg, cplx = _bracket(steps, plan, start, depth_cap, warm)
+    levels = np.asarray(CHECK_LEVELS)
     for _ in range(FLIP_PASSES):
-        check = np.flatnonzero(np.isfinite(hi) & ~_is_flip(mu_hi) & (neg >= 1 - FLIP_NEAR))
+        flip = _is_flip(mu_hi)
+        check = np.flatnonzero(np.isfinite(hi) & np.where(flip, cplx >= 1 - HOPF_NEAR, neg >= 1 - FLIP_NEAR))
         if check.size == 0:
             break
         depths = lo[check][:, None] * levels
@@ -835,7 +845,7 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         idx = check[redo]
         lowest = depths[redo][np.arange(idx.size), levels.size - 1 - np.argmax(unstable[redo][:, ::-1], axis=1)]
         out = _bracket(steps.take(idx), plan, lowest, depth_cap, True)
-        for arr, new in zip((lo, hi, glo, ghi, mu_hi, neg), out):
+        for arr, new in zip((lo, hi, glo, ghi, mu_hi, neg, cplx), out):
             arr[idx] = new
     # Inside the final bracket: the root of log|μ| interpolated linearly in log a (the bracket's
     # geometric mean where a side's value is missing).
