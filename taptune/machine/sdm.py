@@ -108,13 +108,17 @@ ISLAND_RATIO = 1.3
 #: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
 #: A Hopf limit is checked for a flip band below it when a multiplier at its last stable depth
-#: reaches within FLIP_NEAR of −1 along the negative real axis, a flip limit for a Hopf band
-#: when a complex multiplier there lies within HOPF_NEAR of the unit circle …
-FLIP_NEAR = 0.2
-HOPF_NEAR = 0.1
-#: … at these multiples of that depth (rounds: a limit found again lower is checked again).
-CHECK_LEVELS = tuple(0.92 ** np.arange(1, 10))
-FLIP_PASSES = 2
+#: reaches within CHECK_NEAR of −1 along the negative real axis, a flip limit for a Hopf band
+#: when a complex multiplier there lies within CHECK_NEAR of the unit circle …
+CHECK_NEAR = 0.1
+#: … stepping down by CHECK_RATIO while that multiplier stays within WALK_NEAR (the first
+#: CHECK_FIRST steps) or grows, or |μ| grows downward, at most CHECK_STEPS times (a limit found
+#: again lower is checked again, CHECK_PASSES rounds).
+WALK_NEAR = 0.2
+CHECK_FIRST = 2
+CHECK_RATIO = 0.92
+CHECK_STEPS = 9
+CHECK_PASSES = 2
 #: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
 #: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
 ARNOLDI_MIN = 32
@@ -824,27 +828,36 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
     1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|
     (:func:`_bracket`). Where lobes meet, one kind can leave a short unstable band below the
     other's crossing that the bracket stepped over: a Hopf limit whose last stable depth still
-    has a multiplier within FLIP_NEAR of −1 along the negative real axis (the flip branch,
+    has a multiplier within CHECK_NEAR of −1 along the negative real axis (the flip branch,
     which left and re-entered the unit circle, or is about to turn complex), or a flip limit
-    with a complex multiplier within HOPF_NEAR of the circle there, is checked at
-    CHECK_LEVELS × that depth, and searched again downward from the lowest that chatters."""
+    with a complex multiplier within CHECK_NEAR of the circle there, is checked below that
+    depth, in steps of CHECK_RATIO while that multiplier stays within WALK_NEAR (first steps) or
+    grows, or |μ| grows downward, and searched again downward from the first depth that
+    chatters (about +10-20 % evaluations)."""
+    b = tau.size
     steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
     lo, hi, glo, ghi, mu_hi, neg, cplx = _bracket(steps, plan, start, depth_cap, warm)
-    levels = np.asarray(CHECK_LEVELS)
-    for _ in range(FLIP_PASSES):
+    for _ in range(CHECK_PASSES):
         flip = _is_flip(mu_hi)
-        check = np.flatnonzero(np.isfinite(hi) & np.where(flip, cplx >= 1 - HOPF_NEAR, neg >= 1 - FLIP_NEAR))
-        if check.size == 0:
+        other = np.where(flip, cplx, neg)  # the other kind's branch at the last stable depth
+        act = np.flatnonzero(np.isfinite(hi) & (other >= 1 - CHECK_NEAR))
+        depth, last, last_br = lo[act], np.exp(glo[act]), other[act]
+        found = np.full(b, np.nan)  # the highest checked depth that chatters
+        for k in range(CHECK_STEPS):
+            if act.size == 0:
+                break
+            depth = depth * CHECK_RATIO
+            rho, _, ng, cx = _critical(_monodromy(steps.take(act), depth, plan), branches=True)
+            found[act[rho >= 1.0]] = depth[rho >= 1.0]
+            # Walk on down while the other kind's multiplier stays near the circle (for the
+            # first CHECK_FIRST steps) or moves towards it, or |μ| grows downward (a hump below).
+            br = np.where(flip[act], cx, ng)
+            keep = (rho < 1.0) & (((k < CHECK_FIRST) & (br >= 1 - WALK_NEAR)) | (br > last_br) | (rho > last))
+            act, depth, last, last_br = act[keep], depth[keep], rho[keep], br[keep]
+        idx = np.flatnonzero(np.isfinite(found))
+        if idx.size == 0:
             break
-        depths = lo[check][:, None] * levels
-        rho = _critical(_monodromy(steps.take(np.repeat(check, levels.size)), depths.ravel(), plan))[0]
-        unstable = rho.reshape(check.size, levels.size) >= 1.0
-        redo = unstable.any(axis=1)
-        if not redo.any():
-            break
-        idx = check[redo]
-        lowest = depths[redo][np.arange(idx.size), levels.size - 1 - np.argmax(unstable[redo][:, ::-1], axis=1)]
-        out = _bracket(steps.take(idx), plan, lowest, depth_cap, True)
+        out = _bracket(steps.take(idx), plan, found[idx], depth_cap, True)
         for arr, new in zip((lo, hi, glo, ghi, mu_hi, neg, cplx), out):
             arr[idx] = new
     # Inside the final bracket: the root of log|μ| interpolated linearly in log a (the bracket's
