@@ -115,24 +115,33 @@ def test_sdm_covers_a_wide_cut_at_low_speed():
     assert list(flip) == [k == "flip" for k in want.kind]
 
 
-ISLANDS = [
-    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 8500.0),  # Hopf at 3.96 mm stepped over flip from 2.81 mm
-    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 11750.0),  # 3.72 mm against 2.49 mm
-    ("x ≠ y", ASYM_MODES, MILL_CUT, 0.1, "up", 23250.0),  # 33.6 mm against 25.4 mm
-    ("1-DOF", BENCH_MODES, BENCH_CUT, 1.0, "down", 18750.0),  # flip at 3.0 mm over Hopf from 1.44 mm
+#: The 3+3-mode tool point of benchmarks/bench_lobes.py and compare_sdm.py (4 teeth).
+TOOL3_MODES = tuple(ref.Mode(d, f, z, k) for d, modes in (("x", ((2900.0, 0.012, 2.0e7), (4300.0, 0.02, 6.0e7),
+                                                                 (6100.0, 0.03, 9.0e7))),
+                                                          ("y", ((2880.0, 0.012, 1.8e7), (4350.0, 0.02, 6.5e7),
+                                                                 (6000.0, 0.03, 9.0e7))))
+                    for f, z, k in modes)
+TOOL3_CUT = dict(kt=902e6, kn=243e6, diameter=20e-3)
+
+ISLANDS = [  # the speed grid (lowest, highest, step) as the lobes are computed: where main was wrong
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 8500.0, (8000.0, 9000.0, 250.0)),  # Hopf 3.96 mm over flip from 2.81
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 11750.0, (11250.0, 12250.0, 250.0)),  # 3.72 mm against 2.49 mm
+    ("x ≠ y", ASYM_MODES, MILL_CUT, 0.1, "up", 23250.0, (22750.0, 23750.0, 250.0)),  # 33.6 mm against 25.4 mm
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 1.0, "down", 18750.0, (15000.0, 25000.0, 250.0)),  # flip 3.0 over Hopf from 1.44
+    ("3+3 modes", TOOL3_MODES, TOOL3_CUT, 0.05, "down", 9740.0, (9740.0, 9740.0, 1.0)),  # Hopf 7.63 over flip from 6.17
 ]
 
 
-@pytest.mark.parametrize("name, modes, tool, ratio, milling, rpm", ISLANDS,
+@pytest.mark.parametrize("name, modes, tool, ratio, milling, rpm, grid", ISLANDS,
                          ids=[f"{c[0]}-aD{c[3]:g}-{c[5]:.0f}" for c in ISLANDS])
-def test_sdm_finds_the_island_where_lobes_meet(name, modes, tool, ratio, milling, rpm):
-    """2 teeth: where a flip lobe meets a Hopf lobe, depths in a band below one kind's
-    crossing chatter by the other kind; the limit is the band's lower edge, as the reference
-    finds it (at 18,750 rpm the Hopf band's |μ| barely passes 1.001)."""
-    cut = _cut(tool, 2, ratio, milling)
+def test_sdm_finds_the_island_where_lobes_meet(name, modes, tool, ratio, milling, rpm, grid):
+    """Where a flip lobe meets a Hopf lobe, depths in a band below one kind's crossing chatter
+    by the other kind; the limit is the band's lower edge, as the reference finds it (at
+    18,750 rpm the Hopf band's |μ| barely passes 1.001). The 3+3-mode tool's band starts
+    within 10 rpm of 9,740 rpm: a speed alone (no interpolation across that edge)."""
+    cut = _cut(tool, 4 if modes is TOOL3_MODES else 2, ratio, milling)
     want = ref.limits(modes, cut, [rpm], **RES)
-    # On a grid, as the lobes are computed (the 1-DOF: validate_sdm.py's, 5,000–25,000 rpm every 250)
-    speeds = np.arange(5000.0, 25001.0, 250.0) if len(modes) == 1 else np.arange(rpm - 500.0, rpm + 501.0, 250.0)
+    speeds = np.arange(grid[0], grid[1] + 1.0, grid[2])
     a, flip, _, _ = taptune_sdm(modes, cut, speeds)
     i = int(np.argmin(np.abs(speeds - rpm)))
     assert a[i] == pytest.approx(want.a_lim[0], rel=0.03)
