@@ -43,7 +43,11 @@ The limit at one speed is the smallest depth whose largest multiplier reaches 1,
 by bracketing then regula falsi on log|μ| (bracket ``DEPTH_RTOL``, the root interpolated
 inside it), vectorised over the speeds. Where lobes overlap, depth can be unstable in an
 island below a stable band: a limit far above the zero-order guide is checked at the
-guide's depth and searched again from below when that depth chatters. Large jobs are
+guide's depth and searched again from below when that depth chatters. Where a flip lobe
+meets a Hopf lobe, the band below one kind's crossing chatters by the other kind: the
+multipliers at the last stable depth tell (the flip branch, −min Re μ, or a complex |μ|
+near 1 under a flip crossing), and there the search walks down from the limit in steps
+of CHECK_RATIO while that branch stays near the circle or |μ| grows downward. Large jobs are
 split into speed ranges of equal work run in forked processes (``workers``, from the
 main thread only).
 SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
