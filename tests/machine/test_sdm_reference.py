@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from benchmarks import sdm_reference as ref
-from benchmarks.validate_sdm import ASYM_MODES, BENCH_CUT, BENCH_MODES, MILL_CUT, MILL_MODES, taptune_sdm
+from benchmarks.validate_sdm import (ASYM_MODES, BENCH_CUT, BENCH_MODES, MILL_CUT, MILL_MODES, TOOL3_CUT, TOOL3_MODES,
+                                     taptune_sdm)
 
 MM = 1e-3
 #: Resolution of the reference here: 2 elements of degree 8 per period of the fastest mode
@@ -114,14 +115,6 @@ def test_sdm_covers_a_wide_cut_at_low_speed():
     np.testing.assert_array_less(np.abs(a / want.a_lim - 1), 0.03)
     assert list(flip) == [k == "flip" for k in want.kind]
 
-
-#: The 3+3-mode tool point of benchmarks/bench_lobes.py and compare_sdm.py (4 teeth).
-TOOL3_MODES = tuple(ref.Mode(d, f, z, k) for d, modes in (("x", ((2900.0, 0.012, 2.0e7), (4300.0, 0.02, 6.0e7),
-                                                                 (6100.0, 0.03, 9.0e7))),
-                                                          ("y", ((2880.0, 0.012, 1.8e7), (4350.0, 0.02, 6.5e7),
-                                                                 (6000.0, 0.03, 9.0e7))))
-                    for f, z, k in modes)
-TOOL3_CUT = dict(kt=902e6, kn=243e6, diameter=20e-3)
 
 ISLANDS = [  # the speed grid (lowest, highest, step) as the lobes are computed: where main was wrong
     ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 8500.0, (8000.0, 9000.0, 250.0)),  # Hopf 3.96 mm over flip from 2.81
