@@ -8,7 +8,8 @@
    ζ 0.011, k 1.34e6 N/m, down-milling; Insperger & Stépán 2004, Int. J. Numer. Meth. Eng.
    61): lowest limit 1.09 mm (flip, near 18,200 rpm) at a/D 0.05 and 0.75 mm at a/D 0.1.
 3. For the 1-DOF benchmark, a symmetric 2-mode end mill (2.8 and 3.4 kHz, 2 and 4
-   teeth) and one with different modes in x and y (2 teeth), a/D 1, 0.1, 0.05, down and up: ``sdm_lobes`` (with the zero-order guide, as
+   teeth) and one with different modes in x and y (2 teeth), a/D 1, 0.1, 0.05, down and up,
+   and the 3+3-mode tool of bench_lobes.py: ``sdm_lobes`` (with the zero-order guide, as
    ``taptune lobes`` runs it) against the reference at every 250 rpm from 5,000 to
    25,000 rpm: median and largest |a_sdm / a_ref − 1|, and how many speeds call the
    chatter flip or Hopf alike. Speeds the SDM leaves to the zero-order lobes are counted
@@ -42,6 +43,14 @@ MILL_CUT = dict(kt=7.96e8, kn=1.68e8, diameter=12e-3)
 #: With x = y, up- and down-milling of the same a/D are one cut seen in a turned frame (same
 #: limits): a tool with different x and y modes tells them apart.
 ASYM_MODES = MILL_MODES[:2] + (ref.Mode("y", 2650.0, 0.025, 2.2e7), ref.Mode("y", 3550.0, 0.03, 5.0e7))
+#: The 3+3-mode tool point of bench_lobes.py / compare_sdm.py (4 teeth, a/D 0.05, down-milling): its
+#: |μ| lingers near 1 over wide depth ranges, where a weakly unstable band is easy to step over.
+TOOL3_MODES = tuple(ref.Mode(d, f, z, k) for d, ms in (("x", ((2900.0, 0.012, 2.0e7), (4300.0, 0.02, 6.0e7),
+                                                             (6100.0, 0.03, 9.0e7))),
+                                                      ("y", ((2880.0, 0.012, 1.8e7), (4350.0, 0.02, 6.5e7),
+                                                             (6000.0, 0.03, 9.0e7))))
+                    for f, z, k in ms)
+TOOL3_CUT = dict(kt=902e6, kn=243e6, diameter=20e-3)
 RATIOS = (1.0, 0.1, 0.05)
 #: Resolutions of the convergence table: (elements per period of the fastest mode, degree).
 LADDER = ((1, 6), (1, 8), (2, 8), (2, 10), (3, 12), (4, 14))
@@ -58,6 +67,8 @@ def cases():
                 for milling in ("down", "up"):
                     cut = ref.Cut(teeth=teeth, ae=r * tool["diameter"], milling=milling, **tool)
                     out.append((f"{name}, {teeth} teeth, a/D {r:g}, {milling}", modes, cut))
+    out.append(("3+3-mode tool, 4 teeth, a/D 0.05, down", TOOL3_MODES,
+                ref.Cut(teeth=4, ae=0.05 * TOOL3_CUT["diameter"], milling="down", **TOOL3_CUT)))
     return out
 
 

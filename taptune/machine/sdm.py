@@ -43,7 +43,11 @@ The limit at one speed is the smallest depth whose largest multiplier reaches 1,
 by bracketing then regula falsi on log|μ| (bracket ``DEPTH_RTOL``, the root interpolated
 inside it), vectorised over the speeds. Where lobes overlap, depth can be unstable in an
 island below a stable band: a limit far above the zero-order guide is checked at the
-guide's depth and searched again from below when that depth chatters. Large jobs are
+guide's depth and searched again from below when that depth chatters. Where a flip lobe
+meets a Hopf lobe, the band below one kind's crossing chatters by the other kind: the
+multipliers at the last stable depth tell (the flip branch, −min Re μ, or a complex |μ|
+near 1 under a flip crossing), and there the search walks down from the limit in steps
+of CHECK_RATIO while that branch stays near the circle or |μ| grows downward. Large jobs are
 split into speed ranges of equal work run in forked processes (``workers``, from the
 main thread only).
 SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
@@ -107,6 +111,18 @@ PARALLEL_WORK = 2e5
 ISLAND_RATIO = 1.3
 #: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
+#: A Hopf limit is checked for a flip band below it when a multiplier at its last stable depth
+#: reaches within CHECK_NEAR of −1 along the negative real axis, a flip limit for a Hopf band
+#: when a complex multiplier there lies within CHECK_NEAR of the unit circle …
+CHECK_NEAR = 0.1
+#: … stepping down by CHECK_RATIO while that multiplier stays within WALK_NEAR (the first
+#: CHECK_FIRST steps) or grows, or |μ| grows downward, at most CHECK_STEPS times (a limit found
+#: again lower is checked again, CHECK_PASSES rounds).
+WALK_NEAR = 0.2
+CHECK_FIRST = 2
+CHECK_RATIO = 0.92
+CHECK_STEPS = 9
+CHECK_PASSES = 2
 #: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
 #: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
 ARNOLDI_MIN = 32
@@ -351,18 +367,31 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
 
 
-def _critical(phi) -> tuple[np.ndarray, np.ndarray]:
+def _critical(phi, branches: bool = False):
     """(largest |μ|, that μ) of each monodromy matrix: all eigenvalues of small matrices, the
     dominant Ritz value of ``ARNOLDI_STEPS`` Arnoldi steps for large ones (the history's
     multipliers crowd near zero, the few near the unit circle converge first); a Ritz value
-    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues."""
+    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues.
+    ``branches``: also, from the same eigenvalues (Ritz values), how far the flip branch
+    reaches along the negative real axis (−min Re μ: continuous in depth, also where two real
+    multipliers meet and turn into a complex pair) and the largest |μ| that is not real and
+    negative (the Hopf branch)."""
     if phi.shape[-1] < ARNOLDI_MIN:
-        return _largest(np.linalg.eigvals(phi))
-    mu, res = _arnoldi(phi, ARNOLDI_STEPS)
+        ev = np.linalg.eigvals(phi)
+        rho, mu = _largest(ev)
+        return (rho, mu, *_branches(ev)) if branches else (rho, mu)
+    mu, res, ev = _arnoldi(phi, ARNOLDI_STEPS)
     bad = ~(res < ARNOLDI_TOL)
     if bad.any():
-        mu[bad] = _largest(np.linalg.eigvals(phi[bad]))[1]
-    return np.abs(mu), mu
+        ev = ev if ev.shape[-1] >= phi.shape[-1] else np.pad(ev, ((0, 0), (0, phi.shape[-1] - ev.shape[-1])))
+        ev[bad] = np.linalg.eigvals(phi[bad])
+        mu[bad] = _largest(ev[bad])[1]
+    return (np.abs(mu), mu, *_branches(ev)) if branches else (np.abs(mu), mu)
+
+
+def _branches(ev) -> tuple[np.ndarray, np.ndarray]:
+    """(−min Re μ, largest |μ| not real and negative) of each row of eigenvalues."""
+    return -ev.real.min(axis=-1), np.max(np.where(_is_flip(ev), 0.0, np.abs(ev)), axis=-1)
 
 
 def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
@@ -371,10 +400,11 @@ def _largest(mu) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(top), top
 
 
-def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """Dominant Ritz value of ``m`` Arnoldi steps on each matrix (b, n, n) and its relative
+def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Dominant Ritz value of ``m`` Arnoldi steps on each matrix (b, n, n), its relative
     residual |h_{m+1,m} y_m| / |μ| (Saad 2011, Numerical Methods for Large Eigenvalue
-    Problems, § 6.2); classical Gram–Schmidt done twice keeps the basis orthogonal."""
+    Problems, § 6.2) and all Ritz values (b, m); classical Gram–Schmidt done twice keeps the
+    basis orthogonal."""
     b, n, _ = phi.shape
     m = min(m, n - 1)
     basis = np.zeros((b, m + 1, n))
@@ -402,7 +432,7 @@ def _arnoldi(phi, m: int) -> tuple[np.ndarray, np.ndarray]:
         i = np.argmax(np.abs(ritz), axis=-1)
         mu, y = ritz[np.arange(b), i], vec[np.arange(b), :, i]
     res = np.abs(hess[:, m, m - 1] * y[:, m - 1]) / np.maximum(np.abs(mu), 1e-300)
-    return mu, res
+    return mu, res, ritz
 
 
 def _check_teeth(teeth) -> None:
@@ -731,25 +761,26 @@ def _growth_batch(cols, geom, teeth, ktc, krc, tau, depth, plan) -> np.ndarray:
     return _critical(_monodromy(_steps(cols, geom, teeth, ktc, krc, tau, plan), depth, plan))[0]
 
 
-def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
-    """Limiting depth per speed: bracket from ``start`` by growing factors (2, 4, 16 … cold; 1.04,
-    1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|."""
-    b = tau.size
+def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
+    """Bracket and regula falsi of :func:`_search`: (lo, hi, log|μ| at each, μ at hi, and at lo
+    the flip and Hopf branches of :func:`_critical`)."""
+    b = start.size
     lo = np.zeros(b)  # largest depth known stable
     hi = np.full(b, np.inf)  # smallest known unstable
     glo = np.full(b, np.nan)  # log|μ| at lo (NaN: at zero depth, not evaluated)
     ghi = np.full(b, np.nan)
     mu_hi = np.full(b, np.nan + 0j)
+    neg = np.full(b, np.nan)
+    cplx = np.full(b, np.nan)
     grow = np.full(b, 1.04 if warm else 2.0)
     trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
-    steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
     for _ in range(60):
         act = np.flatnonzero(~done)
         if act.size == 0:
             break
-        rho, mu = _critical(_monodromy(steps.take(act), trial[act], plan))
+        rho, mu, ng, cx = _critical(_monodromy(steps.take(act), trial[act], plan), branches=True)
         g = np.log(rho)
         unstable = g >= 0
         for sel, is_unst in ((act[unstable], True), (act[~unstable], False)):
@@ -757,7 +788,7 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             if is_unst:
                 hi[sel], ghi[sel], mu_hi[sel] = trial[sel], gs, mu[unstable]
             else:
-                lo[sel], glo[sel] = trial[sel], gs
+                lo[sel], glo[sel], neg[sel], cplx[sel] = trial[sel], gs, ng[~unstable], cx[~unstable]
         # Next trial depth.
         nxt = trial.copy()
         for j in act:
@@ -793,6 +824,46 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             nxt[j] = np.exp(x)
             side[j] = 1 if trial[j] == hi[j] else -1
         trial = nxt
+    return lo, hi, glo, ghi, mu_hi, neg, cplx
+
+
+def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool = False):
+    """Limiting depth per speed: bracket from ``start`` by growing factors (2, 4, 16 … cold; 1.04,
+    1.08, 1.17 … ``warm``, when ``start`` is a neighbour's limit), then regula falsi on log|μ|
+    (:func:`_bracket`). Where lobes meet, one kind can leave a short unstable band below the
+    other's crossing that the bracket stepped over: a Hopf limit whose last stable depth still
+    has a multiplier within CHECK_NEAR of −1 along the negative real axis (the flip branch,
+    which left and re-entered the unit circle, or is about to turn complex), or a flip limit
+    with a complex multiplier within CHECK_NEAR of the circle there, is checked below that
+    depth, in steps of CHECK_RATIO while that multiplier stays within WALK_NEAR (first steps) or
+    grows, or |μ| grows downward, and searched again downward from the first depth that
+    chatters (about +10-20 % evaluations)."""
+    b = tau.size
+    steps = _steps(cols, geom, teeth, ktc, krc, tau, plan)
+    lo, hi, glo, ghi, mu_hi, neg, cplx = _bracket(steps, plan, start, depth_cap, warm)
+    for _ in range(CHECK_PASSES):
+        flip = _is_flip(mu_hi)
+        other = np.where(flip, cplx, neg)  # the other kind's branch at the last stable depth
+        act = np.flatnonzero(np.isfinite(hi) & (other >= 1 - CHECK_NEAR))
+        depth, last, last_br = lo[act], np.exp(glo[act]), other[act]
+        found = np.full(b, np.nan)  # the highest checked depth that chatters
+        for k in range(CHECK_STEPS):
+            if act.size == 0:
+                break
+            depth = depth * CHECK_RATIO
+            rho, _, ng, cx = _critical(_monodromy(steps.take(act), depth, plan), branches=True)
+            found[act[rho >= 1.0]] = depth[rho >= 1.0]
+            # Walk on down while the other kind's multiplier stays near the circle (for the
+            # first CHECK_FIRST steps) or moves towards it, or |μ| grows downward (a hump below).
+            br = np.where(flip[act], cx, ng)
+            keep = (rho < 1.0) & (((k < CHECK_FIRST) & (br >= 1 - WALK_NEAR)) | (br > last_br) | (rho > last))
+            act, depth, last, last_br = act[keep], depth[keep], rho[keep], br[keep]
+        idx = np.flatnonzero(np.isfinite(found))
+        if idx.size == 0:
+            break
+        out = _bracket(steps.take(idx), plan, found[idx], depth_cap, True)
+        for arr, new in zip((lo, hi, glo, ghi, mu_hi, neg, cplx), out):
+            arr[idx] = new
     # Inside the final bracket: the root of log|μ| interpolated linearly in log a (the bracket's
     # geometric mean where a side's value is missing).
     with np.errstate(all="ignore"):
@@ -801,7 +872,7 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         x = np.where(np.isfinite(x) & (x >= xl) & (x <= xh), x, 0.5 * (xl + xh))
         out = np.where(np.isfinite(hi), np.exp(x), np.inf)
     out = np.where(np.isfinite(hi) & (lo == 0), hi, out)
-    flip = np.isfinite(hi) & (mu_hi.real < 0) & (np.abs(mu_hi.imag) <= 1e-3 * np.abs(mu_hi))
+    flip = np.isfinite(hi) & _is_flip(mu_hi)
     # Chatter frequency: the multiplier's angle θ gives f = (θ/2π + k)/T; the k nearest a mode is kept.
     theta = np.abs(np.angle(mu_hi))
     chatter = np.full(tau.size, np.nan)
@@ -815,6 +886,11 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         dist = np.min(np.abs(cand[:, :, None] - fm[None, None, :]) / fm[None, None, :], axis=2)
         chatter[fin] = cand[np.arange(cand.shape[0]), np.argmin(dist, axis=1)]
     return out, flip, chatter
+
+
+def _is_flip(mu) -> np.ndarray:
+    """Whether multipliers are real and negative (period doubling)."""
+    return (mu.real < 0) & (np.abs(mu.imag) <= 1e-3 * np.abs(mu))
 
 
 def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLobes:

@@ -114,6 +114,28 @@ def test_the_largest_multiplier_of_a_large_map_is_that_of_all_eigenvalues():
     assert np.all(np.abs(np.abs(mu.imag) - np.abs(top.imag)) < 1e-6)
 
 
+@pytest.mark.parametrize("size", [6, 40])
+def test_the_flip_and_hopf_branches_are_read_from_the_multipliers(size):
+    """The check for a band below a limit reads, besides the largest multiplier, how far the
+    multipliers reach along the negative real axis (flip) and the largest complex one (Hopf),
+    from all eigenvalues of a small map and from the Arnoldi Ritz values of a large one."""
+    from taptune.machine import sdm
+
+    rng = np.random.default_rng(3)
+    d = np.zeros(size)
+    d[2:] = rng.uniform(-0.3, 0.3, size - 2)
+    m = np.diag(d)
+    m[0, 0] = -0.95  # a real, negative multiplier (flip branch)
+    c, s = 0.9 * np.cos(2.0), 0.9 * np.sin(2.0)  # a complex pair of modulus 0.9 (Hopf branch)
+    m[size - 2:, size - 2:] = [[c, -s], [s, c]]
+    q, _ = np.linalg.qr(rng.standard_normal((size, size)))
+    phi = (q @ m @ q.T)[None]
+    rho, mu, neg, cplx = sdm._critical(phi, branches=True)
+    assert rho[0] == pytest.approx(0.95, rel=1e-6) and mu[0].real == pytest.approx(-0.95, rel=1e-6)
+    assert neg[0] == pytest.approx(0.95, rel=1e-6)
+    assert cplx[0] == pytest.approx(0.9, rel=1e-6)
+
+
 def test_auto_keeps_to_its_time_budget_and_says_below_which_speed():
     """`auto` leaves the slowest speeds of a costly job to the zero-order lobes, with a warning
     naming the speed; `sdm` (no budget) computes them."""

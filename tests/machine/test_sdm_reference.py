@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from benchmarks import sdm_reference as ref
-from benchmarks.validate_sdm import ASYM_MODES, BENCH_CUT, BENCH_MODES, MILL_CUT, MILL_MODES, taptune_sdm
+from benchmarks.validate_sdm import (ASYM_MODES, BENCH_CUT, BENCH_MODES, MILL_CUT, MILL_MODES, TOOL3_CUT, TOOL3_MODES,
+                                     taptune_sdm)
 
 MM = 1e-3
 #: Resolution of the reference here: 2 elements of degree 8 per period of the fastest mode
@@ -115,12 +116,26 @@ def test_sdm_covers_a_wide_cut_at_low_speed():
     assert list(flip) == [k == "flip" for k in want.kind]
 
 
-@pytest.mark.xfail(reason="sdm_lobes steps over a flip island below a Hopf crossing where two lobes meet "
-                          "(limit 3.96 mm, true 2.81 mm)", strict=False)
-def test_sdm_finds_the_flip_island_where_lobes_meet():
-    """1-DOF benchmark, a/D 0.1 up-milling, 8,500 rpm: depths from 2.81 mm chatter (flip)."""
-    cut = _cut(BENCH_CUT, 2, 0.1, "up")
-    want = ref.limits(BENCH_MODES, cut, [8500.0], **RES)
-    a, flip, _, _ = taptune_sdm(BENCH_MODES, cut, np.array([8500.0]))
-    assert a[0] == pytest.approx(want.a_lim[0], rel=0.03)
-    assert bool(flip[0]) == (want.kind[0] == "flip")
+ISLANDS = [  # the speed grid (lowest, highest, step) as the lobes are computed: where main was wrong
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 8500.0, (8000.0, 9000.0, 250.0)),  # Hopf 3.96 mm over flip from 2.81
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 0.1, "up", 11750.0, (11250.0, 12250.0, 250.0)),  # 3.72 mm against 2.49 mm
+    ("x ≠ y", ASYM_MODES, MILL_CUT, 0.1, "up", 23250.0, (22750.0, 23750.0, 250.0)),  # 33.6 mm against 25.4 mm
+    ("1-DOF", BENCH_MODES, BENCH_CUT, 1.0, "down", 18750.0, (15000.0, 25000.0, 250.0)),  # flip 3.0 over Hopf from 1.44
+    ("3+3 modes", TOOL3_MODES, TOOL3_CUT, 0.05, "down", 9740.0, (9740.0, 9740.0, 1.0)),  # Hopf 7.63 over flip from 6.17
+]
+
+
+@pytest.mark.parametrize("name, modes, tool, ratio, milling, rpm, grid", ISLANDS,
+                         ids=[f"{c[0]}-aD{c[3]:g}-{c[5]:.0f}" for c in ISLANDS])
+def test_sdm_finds_the_island_where_lobes_meet(name, modes, tool, ratio, milling, rpm, grid):
+    """Where a flip lobe meets a Hopf lobe, depths in a band below one kind's crossing chatter
+    by the other kind; the limit is the band's lower edge, as the reference finds it (at
+    18,750 rpm the Hopf band's |μ| barely passes 1.001). The 3+3-mode tool's band starts
+    within 10 rpm of 9,740 rpm: a speed alone (no interpolation across that edge)."""
+    cut = _cut(tool, 4 if modes is TOOL3_MODES else 2, ratio, milling)
+    want = ref.limits(modes, cut, [rpm], **RES)
+    speeds = np.arange(grid[0], grid[1] + 1.0, grid[2])
+    a, flip, _, _ = taptune_sdm(modes, cut, speeds)
+    i = int(np.argmin(np.abs(speeds - rpm)))
+    assert a[i] == pytest.approx(want.a_lim[0], rel=0.03)
+    assert bool(flip[i]) == (want.kind[0] == "flip")
