@@ -108,7 +108,7 @@ def bench(kind: str, location: str, entry: HolderEntry, assembly: Path, count: i
     else:
         wall, cpu, rss, out = run_measured("library", "import", str(export), "--library", location)
         print(f"  import all        {wall:6.1f} s wall  {cpu:6.1f} s CPU ({cpu / count * 1e3:.2f} ms per holder)  "
-              f"{rss:5.0f} MB  (bound 60 s)   {out.splitlines()[0][-90:]}")
+              f"{rss:5.0f} MB  (bound 60 s)\n    {out.splitlines()[0]}")
     one = work / "one.json"
     one.unlink(missing_ok=True)
     HolderLibrary(one).put(replace(entry, name="new holder from the presetter"))
