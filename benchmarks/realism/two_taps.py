@@ -88,7 +88,8 @@ def run_case(split: str, index: int, tier: str, seed: int = 0, stickout_error_mm
     # Per mode: measured in either tap (the realism run's "measured" flag, for one tap).
     either = [next((m[n] for m in result.bending_measured_hz if m[n] is not None), None) for n in range(3)]
     identified = [case.described, second.described]
-    agreed = taps_agree(result.bending_measured_hz, result.relative_floor, [a.stickout for a in identified])
+    agreed = taps_agree(result.bending_measured_hz, result.relative_floor, [a.stickout for a in identified],
+                        [a.tolerances.stickout for a in identified])
     out["predictions"] = predictions(replace(case, queries=(other,)), lambda asm: predict(
         result.param_sets, asm, relative_floor=result.relative_floor, identified=identified,
         measured_modes=measured, agreed=agreed), either)

@@ -107,6 +107,11 @@ AGREED_HEARD = 5
 AGREED_MISFIT = 1e-3
 #: ... at stick-outs at least this far apart [mm].
 AGREED_SPAN_MM = 5.0
+#: Recordings at stick-outs closer than this [mm] count as one: a second tap at the same
+#: stick-out (or a copy of a recording) repeats its frequencies, it adds no evidence.
+AGREED_SAME_MM = 1.0
+#: ... and every stick-out read to this or better [mm] (a gauge; the calibration's ±0.05 mm).
+AGREED_GAUGE_MM = 0.1
 #: Δref of the growth with the stick-out change [mm], fitted among 5/10/20/40 mm on the
 #: calibration records (smallest median half-width; the four differ by < 0.06 %).
 DELTA_REF_MM = 10.0
@@ -452,7 +457,7 @@ def coefficients_for(model_form, groups, n_modes: int) -> np.ndarray:
     return np.concatenate([c, np.full(max(n_modes - c.size, 0), c[-1])])[:n_modes]
 
 
-def taps_agree(measured_hz, misfit: float, stickouts=None) -> bool:
+def taps_agree(measured_hz, misfit: float, stickouts=None, stickout_tolerances=None) -> bool:
     """Whether a joint fit of two or more taps shows that the model describes the holder.
 
     Parameters
@@ -463,19 +468,37 @@ def taps_agree(measured_hz, misfit: float, stickouts=None) -> bool:
     misfit : float
         The joint fit's largest relative miss on them [–] (its ``relative_floor``).
     stickouts : sequence of float, optional
-        The recordings' stick-outs [m]: they must span at least :data:`AGREED_SPAN_MM`
-        (taps at one stick-out say nothing about the transfer; the calibration's were
-        5–10 mm apart). None: not checked.
+        The recordings' stick-outs [m]. Recordings within :data:`AGREED_SAME_MM` of each
+        other count as one stick-out, each mode heard there once; the stick-outs must span
+        at least :data:`AGREED_SPAN_MM` (taps at one stick-out say nothing about the
+        transfer; the calibration's were 5–10 mm apart). None: every recording its own.
+    stickout_tolerances : sequence of float, optional
+        The recordings' stated stick-out tolerances [m]: all must be within
+        :data:`AGREED_GAUGE_MM` (the agreed coefficients were calibrated with gauged
+        stick-outs). None: not checked.
 
     Returns
     -------
     bool
-        True when two or more recordings heard at least :data:`AGREED_HEARD` frequencies
-        between them and the one parameter set meets all within :data:`AGREED_MISFIT`.
+        True when the taps heard at least :data:`AGREED_HEARD` distinct (stick-out, mode)
+        frequencies at two or more stick-outs and the one parameter set meets all within
+        :data:`AGREED_MISFIT`.
     """
-    heard = sum(f is not None for m in measured_hz for f in m)
+    n = len(measured_hz)
+    if stickouts is None:
+        group = list(range(n))
+    else:
+        order = np.argsort(stickouts)
+        group, g, last = [0] * n, -1, -np.inf
+        for i in order:  # sorted stick-outs; a gap over AGREED_SAME_MM starts a new stick-out
+            if (stickouts[i] - last) * 1e3 > AGREED_SAME_MM:
+                g += 1
+            group[i], last = g, stickouts[i]
+    heard = {(group[i], k) for i, m in enumerate(measured_hz) for k, f in enumerate(m) if f is not None}
     spread = stickouts is None or (max(stickouts) - min(stickouts)) * 1e3 >= AGREED_SPAN_MM - 1e-9
-    return len(measured_hz) >= 2 and heard >= AGREED_HEARD and misfit <= AGREED_MISFIT and spread
+    gauged = stickout_tolerances is None or max(stickout_tolerances) * 1e3 <= AGREED_GAUGE_MM + 1e-9
+    return (len(set(group)) >= 2 and len(heard) >= AGREED_HEARD and misfit <= AGREED_MISFIT and spread
+            and gauged)
 
 
 def model_form_for(recordings: int, agreed: bool = False) -> dict:

@@ -203,5 +203,6 @@ def transfer_outlook(result, assemblies, offset_mm: float = 20.0):
         return predict(result.param_sets, target, relative_floor=result.relative_floor, identified=list(assemblies),
                        measured_modes=None if measured is None else measured_modes(measured),
                        agreed=measured is not None and taps_agree(measured, result.relative_floor,
-                                                                  [a.stickout for a in assemblies]))
+                                                                  [a.stickout for a in assemblies],
+                                                                  [a.tolerances.stickout for a in assemblies]))
     return None

@@ -236,6 +236,13 @@ def test_taps_agree_needs_two_taps_five_heard_frequencies_and_a_joint_fit_within
     assert not taps_agree([[5000.0, 14000.0, 22000.0]], 5e-4)  # one tap: five parameters meet three always
     assert taps_agree(six, 5e-4, [0.050, 0.060]) and taps_agree(six, 5e-4, [0.050, 0.055])
     assert not taps_agree(six, 5e-4, [0.050, 0.052])  # two taps at about one stick-out say nothing of transfer
+    # Two taps at one stick-out repeat its three frequencies: 4 distinct, not 7 (five parameters meet 4 always).
+    same = [[4686.0, 14935.0, 19894.0], [4686.3, 14934.0, 19895.0], [3742.0, None, None]]
+    assert not taps_agree(same, 5e-4, [0.0535, 0.0535, 0.0635])
+    assert taps_agree(same[:1] + [[3742.0, 12100.0, None]], 5e-4, [0.0535, 0.0635])
+    # Calibrated with gauged stick-outs: a ruler's ±0.3 mm does not earn it.
+    assert taps_agree(six, 5e-4, [0.050, 0.060], [0.05e-3, 0.05e-3])
+    assert not taps_agree(six, 5e-4, [0.050, 0.060], [0.05e-3, 0.3e-3])
 
 
 def test_agreeing_taps_take_the_agreed_coefficients_for_pinned_modes_only(reference_assembly):
