@@ -324,11 +324,19 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
     scatter = np.exp(sigma * ndtri(np.mod(0.5 + np.arange(DRAWS) * _GOLDEN, 1.0)))
     per_s = sample_limits(rpm_ext, a_ext, rpm, s)
     samples = np.minimum((g[i_g] * scatter)[:, None] * per_s[i_s], depth_cap)
+    one_clean = verdicts.count("stable") < 2
+    if one_clean:
+        # One clean cut alone never deepens the safe depth: it may have been misheard (a
+        # single "stable" at 1.5× the true limit lifted it above the truth at 43 % of the
+        # speeds). A second clean cut confirms it; chatter lowers it at once.
+        samples = np.minimum(samples, prior.a_safe)
     low = np.quantile(samples, 1 - confidence, axis=0, method="inverted_cdf")
     high = np.maximum(np.quantile(samples, confidence, axis=0, method="inverted_cdf"), low)
     dwidth1 = _log_width(low, high)
     text = (f"{sources}; weighed by {len(inside)} observed cut(s)" if sources else
             f"weighed by {len(inside)} observed cut(s)")
+    if one_clean:
+        text += " (the safe depth is not raised until two cuts were clean)"
     band = LobeBand(rpm=rpm, a_safe=low, a_low=low, a_high=high, confidence=confidence,
                     safe_pockets=safe_pockets(rpm, samples, confidence), sources=text, samples=DRAWS)
     return ObservedBand(prior, band, w, s, len(inside), width0, _width(s, ws, confidence),

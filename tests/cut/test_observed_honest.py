@@ -83,3 +83,30 @@ def test_cuts_on_a_stiffer_or_softer_tool_move_and_narrow_the_stiffness_band(cen
     d = ob.to_dict()
     assert d["toolpoint_stiffness_shift_pct"] == pytest.approx(100 * ob.stiffness_shift)
     assert d["stiffness_band_width_after_pct"] < d["stiffness_band_width_before_pct"]
+
+
+def test_one_clean_cut_alone_does_not_deepen_the_safe_depth():
+    """A single 'stable' verdict may be misheard: at 1.5× the true limit it lifted the safe
+    depth above the truth at 43 % of the speeds. The safe depth stays the band's own until a
+    second clean cut; chatter still lowers it. 1-DOF tool at 3 kHz, 4 teeth, truth at the
+    band's centre (zero-order lobes: exact for this regular cut's envelope in the test's use)."""
+    from taptune.machine.band import band_samples, extended_grid
+    from taptune.machine.lobes import stability_lobes
+    from taptune.machine.observed import observed_band
+
+    rpm = np.linspace(8000, 22000, 281)
+    scales, mags = band_samples(0.03, 0.9, 0.6)
+    ext, inner = extended_grid(rpm, scales)
+    f = np.linspace(100, 12000, 12000)
+    w, wn = 2 * np.pi * f, 2 * np.pi * 3000.0
+    phi = 1 / (2e7 * (1 - (w / wn) ** 2 + 2j * 0.02 * w / wn))
+    a_ext = stability_lobes(f, phi, phi, teeth=4, ktc=700e6, krc=200e6, diameter=0.016, ae=0.004, milling="down",
+                            rpm=ext, method="zoa").a_lim
+    truth = a_ext[inner]
+    i = int(np.argmin(abs(rpm - 14000)))
+    one = observed_band(ext, a_ext, inner, scales, [(rpm[i], 1.5 * truth[i], "stable")], 0.9, magnitudes=mags)
+    assert np.all(one.band.a_safe <= one.prior.a_safe * (1 + 1e-12))
+    assert np.mean(one.band.a_safe > truth) == 0.0
+    assert "not raised until two cuts were clean" in one.band.sources
+    chatter = observed_band(ext, a_ext, inner, scales, [(rpm[i], 0.8 * truth[i], "chatter")], 0.9, magnitudes=mags)
+    assert np.median(chatter.band.a_safe / chatter.prior.a_safe) < 1.0  # chatter lowers it at once
