@@ -227,10 +227,8 @@ class CutPanel(QWidget):
     def mark(self, ax) -> None:
         """Draw the observed cuts on the lobes' axes ``ax`` (replacing the previous marks)."""
         for artist in self._marks:
-            try:
+            if artist.axes is not None:  # clearing the axes already took it off (and detached it)
                 artist.remove()
-            except (ValueError, NotImplementedError):  # matplotlib refuses to remove an artist whose figure was cleared
-                pass
         self._marks = []
         key = (getattr(self.view.source, "label", None), self.view.cut().teeth, self.view.cut().milling)
         if self._seen is None or self._seen[0] != key:

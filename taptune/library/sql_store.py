@@ -28,9 +28,10 @@ import re
 import sqlite3
 import sys
 import threading
-from contextlib import contextmanager
+from abc import abstractmethod
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterable
 from urllib.parse import urlsplit, urlunsplit
 
 from taptune.errors import InputError, LibraryError
@@ -157,16 +158,16 @@ class SqlLibrary(HolderLibrary):
     def _q(self, sql: str) -> str:
         return sql if self.placeholder == "?" else sql.replace("?", self.placeholder)
 
-    @contextmanager
-    def _reading(self) -> Iterator[object | None]:
-        """A cursor on a checked database; None when the library does not exist yet (an empty library)."""
-        raise NotImplementedError  # pragma: no cover - interface
-        yield
+    @abstractmethod
+    def _reading(self) -> AbstractContextManager:
+        """A context manager giving a cursor on a checked database; None when the library
+        does not exist yet (an empty library)."""
 
     # ---- schema
 
+    @abstractmethod
     def _existing_tables(self, cursor) -> list[str]:
-        raise NotImplementedError  # pragma: no cover - interface
+        """The names of the tables the database holds."""
 
     def _stored_version(self, cursor) -> int:
         cursor.execute(self._q(f"SELECT value FROM {META_TABLE} WHERE key = ?"), ("schema",))

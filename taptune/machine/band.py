@@ -152,8 +152,15 @@ def band_samples(rel_half_width: float, coverage: float = 0.9, depth_rel: float 
 
     s = scale_samples(rel_half_width, coverage, n) if rel_half_width > 0 else np.ones(n)
     sigma = np.log1p(depth_rel) / ndtri(0.5 + coverage / 2)
-    u = np.mod(0.5 + np.arange(n) * _GOLDEN, 1.0)
-    return s, np.exp(sigma * ndtri(u))
+    return s, np.exp(sigma * golden_normal(n))
+
+
+def golden_normal(n: int) -> np.ndarray:
+    """Standard normal quantiles at frac(½ + i·0.618…), i = 0 … n−1: evenly covering the
+    distribution, in an order independent of evenly spaced quantiles taken alongside."""
+    from scipy.special import ndtri
+
+    return ndtri(np.mod(0.5 + np.arange(n) * _GOLDEN, 1.0))
 
 
 def extended_grid(rpm, scales) -> tuple[np.ndarray, slice]:

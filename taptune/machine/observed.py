@@ -56,7 +56,6 @@ DRAWS = 256
 #: Chance that a cut's verdict is wrong whatever the tool point (a misheard or mislabelled cut):
 #: one such cut must not rule out the truth.
 LAPSE = 0.02
-_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 
 
 def _log_likelihood(limits, depths, verdicts, sigma: float, lapse: float) -> np.ndarray:
@@ -220,13 +219,6 @@ def _log_width(low, high) -> float:
     return float(np.median(np.log(high[ok] / low[ok]))) if ok.any() else 0.0
 
 
-def resampled(scales, weights) -> np.ndarray:
-    """As many factors as ``scales``, drawn at evenly spaced quantiles of the weights (systematic
-    resampling, deterministic): equal-weight samples that the band's quantiles can take as they are."""
-    s = np.asarray(scales, float)
-    return s[_resampled_index(weights, len(s))]
-
-
 def _resampled_index(weights, n: int) -> np.ndarray:
     """``n`` indices at evenly spaced quantiles of the weights."""
     w = np.asarray(weights, float)
@@ -268,9 +260,9 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
         (chatter where ≥ P of the samples are stable, stable where ≥ P chatter), and one when
         the cuts point beyond the band (the best samples are its outermost).
     """
-    from scipy.special import ndtr, ndtri
+    from scipy.special import ndtr
 
-    from taptune.machine.band import lobe_band, safe_pockets, sample_limits, LobeBand
+    from taptune.machine.band import LobeBand, golden_normal, lobe_band, safe_pockets, sample_limits
 
     s0 = np.asarray(scales, float)
     g0 = np.ones_like(s0) if magnitudes is None else np.asarray(magnitudes, float)
@@ -321,7 +313,7 @@ def observed_band(rpm_ext, a_ext, inner: slice, scales, cuts, confidence: float,
     # (normal quantiles in golden-ratio order, so the scatter is independent of the pair).
     idx = _resampled_index(w.ravel(), DRAWS)
     i_s, i_g = np.unravel_index(idx, w.shape)
-    scatter = np.exp(sigma * ndtri(np.mod(0.5 + np.arange(DRAWS) * _GOLDEN, 1.0)))
+    scatter = np.exp(sigma * golden_normal(DRAWS))
     per_s = sample_limits(rpm_ext, a_ext, rpm, s)
     samples = np.minimum((g[i_g] * scatter)[:, None] * per_s[i_s], depth_cap)
     one_clean = verdicts.count("stable") < 2
