@@ -674,41 +674,6 @@ class PostgresLibrary(SqlLibrary):
             cursor.execute("SELECT pg_advisory_xact_lock(%s)", (PG_LOCK_KEY,))
             self._ready = self._check_schema(cursor, create)
 
-    def _set_up(self, conn, create: bool) -> bool:
-        """Check (and with ``create`` make) the schema, then WAL; whether the library is ready.
-
-        SQLite answers "locked" at once, without waiting its busy timeout, in a few cases
-        (a journal-mode change or a WAL recovery while another process opens the same new
-        library): that is retried here until ``lock_timeout`` has passed. Seen once in CI,
-        four processes creating one library at once: one failed with "locked" here,
-        though each writer holds the lock for milliseconds."""
-        deadline = time.monotonic() + self.lock_timeout
-        while True:
-            try:
-                cursor = conn.cursor()
-                cursor.execute("BEGIN IMMEDIATE" if create else "BEGIN")
-                try:
-                    ready = self._check_schema(cursor, create)
-                    cursor.execute("COMMIT")
-                except BaseException:
-                    cursor.execute("ROLLBACK")
-                    raise
-                # Only now that it is ours (another program's database is never changed):
-                # WAL, so readers never wait for the writer; FULL, so a committed change
-                # survives a power cut.
-                if ready and conn.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
-                    conn.execute("PRAGMA journal_mode = WAL")
-                conn.execute("PRAGMA synchronous = FULL")
-                # A bulk import writes its whole transaction (up to ~1 GB) to the WAL: after
-                # the checkpoint the file shrinks back to this size instead of keeping that one.
-                conn.execute(f"PRAGMA journal_size_limit = {WAL_LIMIT_BYTES}")
-                return ready
-            except sqlite3.OperationalError as err:
-                text = str(err)
-                if not ("locked" in text or "busy" in text) or time.monotonic() > deadline:
-                    raise
-                time.sleep(0.05)
-
     def close(self) -> None:
         conn = getattr(self._local, "conn", None)
         if conn is not None and self._local.pid == os.getpid():
