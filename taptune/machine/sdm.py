@@ -89,7 +89,7 @@ NODES_PER_PERIOD = 4.0
 MAX_NODES = 128
 #: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
 #: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
-DEPTH_RTOL = 1e-2
+DEPTH_RTOL = 2e-2
 #: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
 SAMPLES_PER_LOBE = 16
 REL_SPACING_MIN = 0.0035
@@ -109,8 +109,11 @@ AUTO_BUDGET = 1.0e7
 PARALLEL_WORK = 2e5
 #: Limits above this multiple of the guide (zero-order or neighbours' limit) are checked for an island below.
 ISLAND_RATIO = 1.3
-#: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit).
+#: … at these multiples of the guide (flip lobes dip to ~0.6 of the zero-order limit), then up
+#: towards the limit in steps of ISLAND_STEP (a weakly unstable band, |μ| ≤ 1.04, can lie between
+#: the guide and a limit several times higher).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
+ISLAND_STEP = 1.25
 #: A Hopf limit is checked for a flip band below it when a multiplier at its last stable depth
 #: reaches within CHECK_NEAR of −1 along the negative real axis, a flip limit for a Hopf band
 #: when a complex multiplier there lies within CHECK_NEAR of the unit circle …
@@ -123,10 +126,16 @@ CHECK_FIRST = 2
 CHECK_RATIO = 0.92
 CHECK_STEPS = 9
 CHECK_PASSES = 2
+#: A branch that rose and fell again along the walk, peaking within HUMP_NEAR of the circle, is
+#: searched for its top (parabola in log depth, HUMP_ROUNDS evaluations at most).
+HUMP_NEAR = 0.05
+HUMP_ROUNDS = 2
 #: Monodromy matrices of at least this size get their largest multiplier from ARNOLDI_STEPS
-#: Arnoldi steps (relative residual below ARNOLDI_TOL, else from all eigenvalues).
+#: Arnoldi steps (relative residual below ARNOLDI_TOL, else from ARNOLDI_MORE steps, else from all eigenvalues).
 ARNOLDI_MIN = 32
-ARNOLDI_STEPS = 20
+ARNOLDI_STEPS = 16
+#: … and ARNOLDI_MORE steps where that residual is too large.
+ARNOLDI_MORE = 28
 ARNOLDI_TOL = 1e-7
 #: Speeds per batch of monodromy matrices (bounds the temporary arrays).
 BATCH = 256
@@ -307,11 +316,11 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     """Monodromy matrices of a batch at depths ``depth`` (b,) → (b, n, n).
 
     State z = (q, v of every mode, x then y at the p + 1 nodes of the previous active part).
-    Each step: exact free motion to its midpoint, the cutting impulse of the step, exact
-    free motion on (to the next midpoint, or through the free flight to the period's end).
-    The steps between two history nodes are first folded into one map of the modal state
-    (and the delayed positions' impulses into one matrix), so the full state is carried
-    node to node, not step to step.
+    Each step: exact free motion to its midpoint, the cutting impulse of the
+    step, exact free motion on (to the next midpoint, or through the free flight to the
+    period's end). The steps between two history nodes are first folded into one map of the
+    modal state (and the delayed positions' impulses into one matrix), so the full state is
+    carried node to node, not step to step.
     """
     s, b, nm, _ = steps.kq.shape
     p1 = len(plan.nodes)
@@ -323,46 +332,51 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     src = -steps.kh * a  # … per delayed x, y, (s, b, M, 2)
     e00, e01, e10, e11 = (x[..., 0][..., None, :] for x in steps.between)  # row scalings, (s, b, 1, M)
 
-    def after_kick(m, i):
-        """m · kick_i for maps m (…, 2M, 2M), as (m_q + m_v · a K_i, m_v)."""
-        return np.concatenate([m[..., :nm] + m[..., nm:] @ akq[i], m[..., nm:]], axis=-1)
-
-    def after_prop(m, f00, f01, f10, f11):
-        """m · (free motion with coefficients f..) for maps m (…, 2M, 2M)."""
-        mq, mv = m[..., :nm], m[..., nm:]
-        return np.concatenate([mq * f00 + mv * f10, mq * f01 + mv * f11], axis=-1)
-
-    # Backward through each node interval: w maps the state after kick i to the state after
-    # the interval's last kick; g_i = w · (impulse of step i).
+    # Backward through each node interval: (wq, wv) map the state after kick i to the state
+    # after the interval's last kick (their q and v columns); g_i = wv · (impulse of step i).
+    # Intervals are longest mid-way (Chebyshev nodes), so those still stepping form one slice.
     ns = plan.node_step
     length = np.diff(ns)
     last = ns[1:] - 1
-    w = np.broadcast_to(np.eye(m2), (p1 - 1, b, m2, m2)).copy()
-    g = np.empty((s, b, m2, 2))
+    wq = np.zeros((p1 - 1, b, m2, nm))
+    wv = np.zeros((p1 - 1, b, m2, nm))
+    wq[:, :, ii, ii] = 1.0
+    wv[:, :, nm + ii, ii] = 1.0
+    g = np.empty((b, m2, 2, s))  # step axis last: each interval's steps are one slice
     for t in range(int(length.max())):
         live = np.flatnonzero(length > t)
+        if live[-1] - live[0] + 1 == live.size:
+            live = slice(live[0], live[-1] + 1)
         i = last[live] - t
         if t:
-            w[live] = after_prop(after_kick(w[live], i + 1), e00[i], e01[i], e10[i], e11[i])
-        g[i] = w[live][..., nm:] @ src[i]
+            q, v = wq[live], wv[live]
+            q += v @ akq[i + 1]  # the kick of step i + 1
+            f00, f01, f10, f11 = e00[i], e01[i], e10[i], e11[i]  # then free motion back to step i
+            wq[live], wv[live] = q * f00 + v * f10, q * f01 + v * f11
+        g[..., i] = np.moveaxis(wv[live] @ src[i], 0, -1)
     # State after an interval's last kick (the start, for the first) → after the next's last kick.
-    fold = after_kick(w, ns[:-1])
+    wq += wv @ akq[ns[:-1]]
     j = last[:-1]
-    fold[1:] = after_prop(fold[1:], e00[j], e01[j], e10[j], e11[j])
-    fold[0] = after_prop(fold[0], *(x[..., 0][:, None, :] for x in steps.first))
+    first = tuple(x[..., 0][:, None, :] for x in steps.first)
+    f00, f01, f10, f11 = (np.concatenate([f[None], e[j]]) for f, e in zip(first, (e00, e01, e10, e11)))
+    fold = np.concatenate([wq * f00 + wv * f10, wq * f01 + wv * f11], axis=-1)  # (p, b, 2M, 2M)
+    # Rows reading x, y at each interval's end node from the modal state.
+    te0, te1 = steps.to_edge
+    read = np.concatenate([te0[last][..., 0][..., None, :] * steps.sel_t, te1[last][..., 0][..., None, :] * steps.sel_t],
+                          axis=-1)  # (p, b, 2, 2M)
     z = np.zeros((b, m2, n))
     z[:, ii, ii] = 1.0
     z[:, nm + ii, nm + ii] = 1.0
+    spare = np.empty_like(z)
     hist = np.zeros((b, 2, p1, n))  # x, y at each node (the history block: direction-major)
     hist[:, :, 0, :nm] = steps.sel_t
-    te0, te1 = steps.to_edge
     for c in range(p1 - 1):
         lo, hi = ns[c], ns[c + 1]
-        z = fold[c] @ z
+        np.matmul(fold[c], z, out=spare)
+        z, spare = spare, z
         # Σ_i g_i ⊗ (interpolation row i): the delayed positions' impulses of the interval.
-        gc = np.moveaxis(g[lo:hi], 0, -1)  # (b, 2M, 2, q)
-        z[:, :, m2:] += (gc @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
-        hist[:, :, c + 1] = steps.sel_t @ (te0[hi - 1] * z[:, :nm] + te1[hi - 1] * z[:, nm:])
+        z[:, :, m2:] += (g[..., lo:hi] @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
+        np.matmul(read[c], z, out=hist[:, :, c + 1])
     q, v = _propagate(tuple(x[-1] for x in steps.between), z[:, :nm], z[:, nm:].copy())
     return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
 
@@ -371,7 +385,8 @@ def _critical(phi, branches: bool = False):
     """(largest |μ|, that μ) of each monodromy matrix: all eigenvalues of small matrices, the
     dominant Ritz value of ``ARNOLDI_STEPS`` Arnoldi steps for large ones (the history's
     multipliers crowd near zero, the few near the unit circle converge first); a Ritz value
-    whose residual is above ``ARNOLDI_TOL`` is recomputed from all eigenvalues.
+    whose residual is above ``ARNOLDI_TOL`` is recomputed from ``ARNOLDI_MORE`` steps, then
+    from all eigenvalues.
     ``branches``: also, from the same eigenvalues (Ritz values), how far the flip branch
     reaches along the negative real axis (−min Re μ: continuous in depth, also where two real
     multipliers meet and turn into a complex pair) and the largest |μ| that is not real and
@@ -382,6 +397,10 @@ def _critical(phi, branches: bool = False):
         return (rho, mu, *_branches(ev)) if branches else (rho, mu)
     mu, res, ev = _arnoldi(phi, ARNOLDI_STEPS)
     bad = ~(res < ARNOLDI_TOL)
+    if bad.any():  # a longer Krylov space for the few that have not converged
+        ev = np.pad(ev, ((0, 0), (0, ARNOLDI_MORE - ev.shape[-1])))
+        mu[bad], res[bad], ev[bad] = _arnoldi(phi[bad], ARNOLDI_MORE)
+        bad &= ~(res < ARNOLDI_TOL)
     if bad.any():
         ev = ev if ev.shape[-1] >= phi.shape[-1] else np.pad(ev, ((0, 0), (0, phi.shape[-1] - ev.shape[-1])))
         ev[bad] = np.linalg.eigvals(phi[bad])
@@ -611,11 +630,21 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     known = coarse & ok & np.isfinite(a_s)
     screened, below = _screen_dense(run, samples, tau, dense & rest & ok, known, a_s, flip_s, chat_s)
     rest &= ~screened
-    if rest.any():
+    # The others level by level, each from the nearest limits known (the midpoints first): a
+    # neighbour twice as close guesses about four times better, and a close guess is bracketed
+    # in two evaluations.
+    stride = COARSE
+    while stride > 1 and rest.any():
+        stride //= 2
+        now = rest & (np.arange(samples.size) % stride == 0)
+        if not now.any():
+            continue
         warm = known.sum() >= 2
-        guess = (np.interp(tau[rest], tau[known][::-1], a_s[known][::-1]) if warm else start[rest])
-        guess = np.where(np.isfinite(below[rest]), below[rest], guess)
-        a_s[rest], flip_s[rest], chat_s[rest] = _limits(run, tau[rest], guess, ok[rest], warm=warm)
+        guess = (np.interp(tau[now], tau[known][::-1], a_s[known][::-1]) if warm else start[now])
+        guess = np.where(np.isfinite(below[now]), below[now], guess)
+        a_s[now], flip_s[now], chat_s[now] = _limits(run, tau[now], guess, ok[now], warm=warm)
+        rest &= ~now
+        known |= now & ok & np.isfinite(a_s)
     island = guide is not None
     if island:
         _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok & ~screened)
@@ -716,15 +745,19 @@ def _islands(run, tau, a_s, flip_s, chat_s, guide_a, ok) -> None:
     """Where lobes overlap, depth can chatter in an island below a stable band, and a search
     started from a neighbour's limit brackets only the crossing nearest to it. Limits above
     ISLAND_RATIO × the guide (the lower of the zero-order limit and the neighbouring samples'
-    limits) are checked at ISLAND_LEVELS × the guide;
-    where one chatters, the limit is searched again downward from the lowest (in place)."""
+    limits) are checked at ISLAND_LEVELS × the guide and on up to the limit in steps of
+    ISLAND_STEP; where one chatters, the limit is searched again downward from the lowest (in place)."""
     g = np.where(np.isfinite(guide_a) & (guide_a > 0), guide_a, np.nan)
     check = np.flatnonzero(ok & np.isfinite(a_s) & np.isfinite(g) & (a_s > ISLAND_RATIO * g))
     if check.size == 0:
         return
-    levels = np.asarray(ISLAND_LEVELS)
-    rho = _growth(run, np.repeat(tau[check], levels.size), (g[check][:, None] * levels).ravel())
-    unstable = rho.reshape(check.size, levels.size) >= 1.0
+    rungs = np.ceil(np.log(a_s[check] / (ISLAND_LEVELS[-1] * g[check])) / np.log(ISLAND_STEP)).astype(int) - 1
+    levels = np.concatenate([ISLAND_LEVELS, ISLAND_LEVELS[-1] * ISLAND_STEP ** np.arange(1, max(rungs.max(), 0) + 1)])
+    use = np.arange(levels.size)[None, :] < (len(ISLAND_LEVELS) + np.maximum(rungs, 0))[:, None]  # (check, levels)
+    row, col = np.nonzero(use)
+    rho = _growth(run, tau[check[row]], g[check[row]] * levels[col])
+    unstable = np.zeros(use.shape, bool)
+    unstable[row, col] = rho >= 1.0
     redo = unstable.any(axis=1)
     if redo.any():
         idx = check[redo]
@@ -772,8 +805,10 @@ def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
     mu_hi = np.full(b, np.nan + 0j)
     neg = np.full(b, np.nan)
     cplx = np.full(b, np.nan)
-    grow = np.full(b, 1.04 if warm else 2.0)
-    trial = np.minimum((0.98 if warm else 0.7) * start, 0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
+    # Warm: the first two trials straddle the guess by one final bracket's width.
+    grow = np.full(b, 1 + 0.98 * DEPTH_RTOL if warm else 2.0)
+    trial = np.minimum((1 - 0.49 * DEPTH_RTOL if warm else 0.7) * start,
+                       0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
     for _ in range(60):
@@ -847,6 +882,11 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         act = np.flatnonzero(np.isfinite(hi) & (other >= 1 - CHECK_NEAR))
         depth, last, last_br = lo[act], np.exp(glo[act]), other[act]
         found = np.full(b, np.nan)  # the highest checked depth that chatters
+        # The walk's last three (log depth, branch) points: where the branch rose and fell
+        # again near the circle, its hump may peak above 1 between two steps.
+        x1, v1 = np.log(depth), last_br
+        x2, v2 = np.full(act.size, np.nan), np.full(act.size, np.nan)
+        humps = []
         for k in range(CHECK_STEPS):
             if act.size == 0:
                 break
@@ -857,7 +897,15 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
             # first CHECK_FIRST steps) or moves towards it, or |μ| grows downward (a hump below).
             br = np.where(flip[act], cx, ng)
             keep = (rho < 1.0) & (((k < CHECK_FIRST) & (br >= 1 - WALK_NEAR)) | (br > last_br) | (rho > last))
+            hump = (rho < 1.0) & ~keep & (v1 > v2) & (v1 > br) & (v1 >= 1 - HUMP_NEAR)
+            if hump.any():
+                humps.append((act[hump], np.stack([x2[hump], x1[hump], np.log(depth[hump])]),
+                              np.stack([v2[hump], v1[hump], br[hump]])))
+            x2, v2, x1, v1 = x1[keep], v1[keep], np.log(depth[keep]), br[keep]
             act, depth, last, last_br = act[keep], depth[keep], rho[keep], br[keep]
+        for idx, xs, vs in humps:
+            top = _hump_top(steps.take(idx), plan, xs, vs, flip[idx])
+            found[idx] = np.where(np.isnan(found[idx]), top, found[idx])
         idx = np.flatnonzero(np.isfinite(found))
         if idx.size == 0:
             break
@@ -886,6 +934,41 @@ def _search(cols, geom, teeth, ktc, krc, tau, start, depth_cap, plan, warm: bool
         dist = np.min(np.abs(cand[:, :, None] - fm[None, None, :]) / fm[None, None, :], axis=2)
         chatter[fin] = cand[np.arange(cand.shape[0]), np.argmin(dist, axis=1)]
     return out, flip, chatter
+
+
+def _hump_top(steps: _Steps, plan: _Plan, xs, vs, flip) -> np.ndarray:
+    """Depths [m] where a branch's hump, sampled at three log depths ``xs`` (3, h) with values
+    ``vs`` (the middle one highest), chatters at its top (NaN where it stays stable): the
+    parabola's vertex, refined HUMP_ROUNDS times through the best three points."""
+    out = np.full(xs.shape[1], np.nan)
+    act = np.arange(xs.shape[1])
+    for _ in range(HUMP_ROUNDS):
+        x0, x1, x2 = xs
+        y0, y1, y2 = vs
+        with np.errstate(all="ignore"):
+            den = (x0 - x1) * (y1 - y2) - (x1 - x2) * (y0 - y1)
+            x = x1 - 0.5 * ((x0 - x1) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y0 - y1)) / den
+        lo, hi = np.minimum(x0, x2), np.maximum(x0, x2)
+        x = np.where(np.isfinite(x) & (x > lo) & (x < hi) & (np.abs(x - x1) > 1e-3 * (hi - lo)), x,
+                     0.5 * (x1 + np.where(np.abs(x1 - x0) > np.abs(x2 - x1), x0, x2)))
+        rho, _, ng, cx = _critical(_monodromy(steps.take(act), np.exp(x), plan), branches=True)
+        y = np.where(flip[act], cx, ng)
+        hit = rho >= 1.0
+        out[act[hit]] = np.exp(x[hit])
+        # Keep the three points around the highest.
+        pts_x = np.vstack([xs, x])
+        pts_y = np.vstack([vs, y])
+        order = np.argsort(pts_x, axis=0)
+        pts_x, pts_y = np.take_along_axis(pts_x, order, 0), np.take_along_axis(pts_y, order, 0)
+        best = np.clip(np.argmax(pts_y, axis=0), 1, 2)
+        cols = np.arange(act.size)
+        xs = np.stack([pts_x[best - 1, cols], pts_x[best, cols], pts_x[best + 1, cols]])
+        vs = np.stack([pts_y[best - 1, cols], pts_y[best, cols], pts_y[best + 1, cols]])
+        more = ~hit & (vs[1] >= 1 - HUMP_NEAR)
+        act, xs, vs = act[more], xs[:, more], vs[:, more]
+        if act.size == 0:
+            break
+    return out
 
 
 def _is_flip(mu) -> np.ndarray:

@@ -145,3 +145,32 @@ def test_auto_keeps_to_its_time_budget_and_says_below_which_speed():
     assert np.isnan(tight.a_lim[0]) and "below" in tight.warnings[0] and "--method sdm" in tight.warnings[0]
     free = sdm_lobes(END_MILL_X, END_MILL_Y, rpm=np.array([5000.0]), **cut)
     assert np.isfinite(free.a_lim[0]) and not free.warnings
+
+
+TOOL3_X = ModalSet([2900.0, 4300.0, 6100.0], [0.012, 0.02, 0.03], [2.0e7, 6.0e7, 9.0e7])
+TOOL3_Y = ModalSet([2880.0, 4350.0, 6000.0], [0.012, 0.02, 0.03], [1.8e7, 6.5e7, 9.0e7])
+TOOL3_CUT = dict(teeth=4, ktc=902e6, krc=243e6, diameter=20 * MM, ae=1 * MM, milling="down")
+
+
+@pytest.mark.parametrize("rpm, band_mm", [(8250.0, (28.9, 30.3)), (12750.0, (14.0, 15.3)), (17750.0, (11.8, 17.3))])
+def test_no_depth_below_the_limit_chatters_where_a_weak_band_lies_under_a_stable_one(rpm, band_mm):
+    """On a 3+3-mode tool point (4 teeth, a/D 0.05) the largest multiplier lingers near the
+    unit circle over wide depth ranges: a weakly unstable band (|μ| ≤ 1.06: 28.7-30.5 mm at
+    8,250 rpm, 13.9-15.5 mm at 12,750 rpm, 11.6-17.5 mm at 17,750 rpm) lies under a stable
+    band, and a search that steps over it reports 15-300 % too deep. The limit must be the
+    smallest depth that chatters on a fine depth scan of the multipliers themselves."""
+    from taptune.machine.lobes import zoa_lobes
+
+    f = np.arange(100.0, 9000.0, 2.0)
+    speeds = np.arange(5000.0, 25000.0 + 1, 250.0)  # as the validation runs it: one limit per speed
+    zoa = zoa_lobes(f, TOOL3_X.frf(f), TOOL3_Y.frf(f), rpm=speeds, **TOOL3_CUT)
+    guide = lambda r: np.interp(r, zoa.rpm, np.where(np.isfinite(zoa.a_lim), zoa.a_lim, zoa.a_crit))  # noqa: E731
+    lobes = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=speeds, guide=guide, **TOOL3_CUT)
+    a = lobes.a_lim[np.flatnonzero(speeds == rpm)[0]]
+    inside = np.linspace(*band_mm, 5) * MM
+    rho_band, _ = sdm_growth(TOOL3_X, TOOL3_Y, rpm=rpm, depth=inside, **TOOL3_CUT)
+    assert np.all(rho_band > 1.0)  # the band is there
+    scan = np.geomspace(1.0 * MM, 0.98 * a, 40)
+    rho, _ = sdm_growth(TOOL3_X, TOOL3_Y, rpm=rpm, depth=scan, **TOOL3_CUT)
+    assert np.all(rho < 1.0), f"chatters at {scan[rho >= 1][0] / MM:.2f} mm below the limit {a / MM:.2f} mm"
+    assert a <= band_mm[0] * MM * 1.02
