@@ -84,9 +84,9 @@ STEPS_PER_MODE = 24
 RESOLVE_SHARE = 0.1
 #: History nodes: this many, plus NODES_PER_PERIOD per period of the fastest mode in the active part.
 MIN_NODES = 8
-NODES_PER_PERIOD = 4.0
+NODES_PER_PERIOD = 3.5
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
-MAX_NODES = 128
+MAX_NODES = 140
 #: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
 #: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
 DEPTH_RTOL = 2e-2
@@ -101,6 +101,11 @@ DENSE_WINDOW = 0.015
 COARSE = 4
 #: Rounds of extra samples beside each local minimum and maximum of the sampled limit.
 REFINE_ROUNDS = 2
+#: Neighbouring limits further apart than this ratio are a jump (a band that ends between them):
+#: halved JUMP_ROUNDS times down to JUMP_WIDTH (relative speed); the grid between takes the lower.
+JUMP_RATIO = 1.25
+JUMP_ROUNDS = 4
+JUMP_WIDTH = 0.0005
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
 #: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
@@ -645,31 +650,40 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
         a_s[now], flip_s[now], chat_s[now] = _limits(run, tau[now], guess, ok[now], warm=warm)
         rest &= ~now
         known |= now & ok & np.isfinite(a_s)
-    island = guide is not None
-    if island:
-        _islands(run, tau, a_s, flip_s, chat_s, np.minimum(start, _neighbour_min(a_s)), ok & ~screened)
+    # Islands are looked for under the lower of the guide and the neighbours' limits.
+    guide_at = (lambda r: np.asarray(guide(r), dtype=float)) if guide is not None else (lambda r: np.full(r.size, np.inf))
+    _islands(run, tau, a_s, flip_s, chat_s, np.minimum(guide_at(samples), _neighbour_min(a_s)), ok & ~screened)
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
-    for _ in range(REFINE_ROUNDS):
+    # Then where the limit jumps between neighbours (a band that ends), the jump is narrowed
+    # down by halving (the grid between takes the lower side, _on_grid).
+    for round_ in range(REFINE_ROUNDS + JUMP_ROUNDS):
         fin = np.where(np.isfinite(a_s), a_s, np.inf)
-        inner = np.arange(1, samples.size - 1)
-        ext = inner[((fin[inner] < fin[inner - 1]) & (fin[inner] <= fin[inner + 1]))
-                    | ((fin[inner] > fin[inner - 1]) & (fin[inner] >= fin[inner + 1]) & np.isfinite(fin[inner]))]
-        ext = ext[ok[ext] & ~dense[ext]]
-        if ext.size == 0:
-            break
-        new = np.unique(np.concatenate([0.5 * (samples[ext - 1] + samples[ext]), 0.5 * (samples[ext] + samples[ext + 1])]))
+        if round_ < REFINE_ROUNDS:
+            inner = np.arange(1, samples.size - 1)
+            ext = inner[((fin[inner] < fin[inner - 1]) & (fin[inner] <= fin[inner + 1]))
+                        | ((fin[inner] > fin[inner - 1]) & (fin[inner] >= fin[inner + 1]) & np.isfinite(fin[inner]))]
+            ext = ext[ok[ext] & ~dense[ext]]
+            new = np.concatenate([0.5 * (samples[ext - 1] + samples[ext]), 0.5 * (samples[ext] + samples[ext + 1])])
+        else:
+            jump = np.flatnonzero(_jumps(samples, fin) & ok[:-1] & ok[1:] & ~dense[:-1] & ~dense[1:]
+                                  & (samples[1:] / samples[:-1] - 1 > JUMP_WIDTH))
+            new = 0.5 * (samples[jump] + samples[jump + 1])
         new = np.setdiff1d(new, samples)
+        if new.size == 0:
+            if round_ < REFINE_ROUNDS:
+                continue
+            break
         tau_n = 60.0 / (teeth * new)
-        guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
+        at = np.searchsorted(samples, new)
+        near = np.minimum(fin[np.clip(at - 1, 0, None)], fin[np.clip(at, None, samples.size - 1)])
+        if round_ < REFINE_ROUNDS:
+            guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
+        else:  # from the lower side: its band may go on past the middle
+            guess = near
         guess = np.where(np.isfinite(guess), guess, start[0])
         a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool), warm=True)
-        if island:
-            fin_s = np.where(np.isfinite(a_s), a_s, np.inf)
-            at = np.searchsorted(samples, new)
-            near = np.minimum(fin_s[np.clip(at - 1, 0, None)], fin_s[np.clip(at, None, samples.size - 1)])
-            _islands(run, tau_n, a_n, f_n, c_n, np.minimum(np.asarray(guide(new), dtype=float), near),
-                     np.ones(new.size, bool))
+        _islands(run, tau_n, a_n, f_n, c_n, np.minimum(guide_at(new), near), np.ones(new.size, bool))
         samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
         cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
@@ -677,6 +691,14 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
     return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
+
+
+def _jumps(samples, fin) -> np.ndarray:
+    """Whether the limit jumps between neighbouring samples (ratio above JUMP_RATIO; inf: no
+    depth chatters), per gap (samples.size − 1)."""
+    lo, hi = np.minimum(fin[:-1], fin[1:]), np.maximum(fin[:-1], fin[1:])
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(lo) & (hi > JUMP_RATIO * lo)
 
 
 def _screen_dense(run, samples, tau, cand, known, a_s, flip_s, chat_s):
@@ -999,6 +1021,13 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
         ch = np.where(fl, ch * grid / samples[near], ch)  # a flip chatters at (k + ½) f_T of its own speed
         inf_near = ~np.isfinite(a_s[near])
         a = np.where(inf_near, np.inf, a)
+        # Across a jump the line between the two sides would claim depths only the upper side has.
+        s_use = samples[use]
+        f_use = np.where(np.isfinite(a_s[use]), a_s[use], np.inf)
+        gap = np.clip(np.searchsorted(s_use, grid) - 1, 0, max(s_use.size - 2, 0))
+        if s_use.size >= 2:
+            at_jump = _jumps(s_use, f_use)[gap] & (grid > s_use[gap]) & (grid < s_use[gap + 1])
+            a = np.where(at_jump, np.minimum(f_use[gap], f_use[gap + 1]), a)
         if dense.any():
             lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
             hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")

@@ -174,3 +174,22 @@ def test_no_depth_below_the_limit_chatters_where_a_weak_band_lies_under_a_stable
     rho, _ = sdm_growth(TOOL3_X, TOOL3_Y, rpm=rpm, depth=scan, **TOOL3_CUT)
     assert np.all(rho < 1.0), f"chatters at {scan[rho >= 1][0] / MM:.2f} mm below the limit {a / MM:.2f} mm"
     assert a <= band_mm[0] * MM * 1.02
+
+
+def test_the_grid_across_a_jump_of_the_limit_takes_the_lower_side():
+    """Where a weak band ends between two sampled speeds the limit jumps (15.7 mm at 12,780
+    rpm, 27.7 mm at 12,790 rpm, 51 mm at 12,810 rpm on the 3+3-mode tool); a straight line
+    between samples claimed up to 58 % more depth than the speed's own limit. The jump is
+    narrowed down by extra samples and the grid across it takes the lower side: nowhere
+    above the point-by-point limit."""
+    from taptune.machine.lobes import zoa_lobes
+
+    f = np.arange(100.0, 9000.0, 2.0)
+    grid = np.arange(12000.0, 13600.0 + 1, 10.0)
+    zoa = zoa_lobes(f, TOOL3_X.frf(f), TOOL3_Y.frf(f), rpm=grid, **TOOL3_CUT)
+    guide = lambda r: np.interp(r, zoa.rpm, np.where(np.isfinite(zoa.a_lim), zoa.a_lim, zoa.a_crit))  # noqa: E731
+    lobes = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=grid, guide=guide, **TOOL3_CUT)
+    near = np.flatnonzero((grid >= 12740.0) & (grid <= 12840.0))
+    point = np.array([sdm_lobes(TOOL3_X, TOOL3_Y, rpm=grid[i:i + 1], guide=guide, **TOOL3_CUT).a_lim[0] for i in near])
+    assert np.max(point[1:] / point[:-1]) > 1.5  # the jump is there
+    assert np.all(lobes.a_lim[near] <= 1.02 * point), np.c_[grid[near], lobes.a_lim[near] / MM, point / MM]
