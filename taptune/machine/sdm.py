@@ -106,6 +106,8 @@ REFINE_ROUNDS = 2
 JUMP_RATIO = 1.25
 JUMP_ROUNDS = 4
 JUMP_WIDTH = 0.0005
+#: Rounds of samples beside each local minimum where lobes are denser than the window.
+DENSE_ROUNDS = 2
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
 #: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
@@ -480,6 +482,12 @@ def sdm_growth(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter
     return _critical(phi)
 
 
+def _is_dense(tau, f_max: float):
+    """Whether the lobes of a mode at ``f_max`` [Hz] are narrower than the window a machinist can
+    hold at tooth period ``tau`` [s] (a lobe spans 1/(τ f) of the speed)."""
+    return 1.0 / (f_max * tau) < 2 * DENSE_WINDOW
+
+
 def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tuple[np.ndarray, np.ndarray]:
     """SDM speeds (ascending) and whether each lies where the lobes are too dense to resolve."""
     tau_lo, tau_hi = 60.0 / (rpm_hi * teeth), 60.0 / (rpm_lo * teeth)
@@ -489,7 +497,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tu
         t = taus[-1]
         lobe = 1.0 / (SAMPLES_PER_LOBE * f_max)
         step = float(np.clip(lobe, REL_SPACING_MIN * t, REL_SPACING_MAX * t))
-        is_dense = 1.0 / (f_max * t) < 2 * DENSE_WINDOW  # a lobe spans n/(τ f) of the speed
+        is_dense = _is_dense(t, f_max)
         if is_dense:
             step = max(step, REL_SPACING_DENSE * t)
         taus.append(min(t + step, tau_hi))
@@ -594,7 +602,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
         samples, dense = _sample_speeds(lo, hi, teeth, f_max)
         if samples.size > speeds.size:  # never more work than the grid itself
             samples = np.unique(speeds)
-            dense = np.zeros(samples.size, bool)
+            dense = _is_dense(60.0 / (teeth * samples), f_max)
     tau = 60.0 / (teeth * samples)
     periods = geom[2] * tau * f_res
     p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
@@ -656,41 +664,77 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     # The lowest points of the lobes (the critical depth lies there) and the pocket tops
     # are narrow: each local extremum of the samples gets two more rounds of samples beside it.
     # Then where the limit jumps between neighbours (a band that ends), the jump is narrowed
-    # down by halving (the grid between takes the lower side, _on_grid).
-    for round_ in range(REFINE_ROUNDS + JUMP_ROUNDS):
+    # down by halving (the grid between takes the lower side, _on_grid). Where the lobes are
+    # denser than the window (the lowest in it is reported) a lobe's bottom can fall between
+    # samples 1 % apart: each local minimum gets DENSE_ROUNDS rounds of samples beside it.
+    rounds = ["extrema"] * REFINE_ROUNDS + ["jumps"] * JUMP_ROUNDS + ["dense"] * DENSE_ROUNDS
+    for kind in rounds:
         fin = np.where(np.isfinite(a_s), a_s, np.inf)
-        if round_ < REFINE_ROUNDS:
-            inner = np.arange(1, samples.size - 1)
+        inner = np.arange(1, samples.size - 1)
+        guess = None
+        if kind == "extrema":
             ext = inner[((fin[inner] < fin[inner - 1]) & (fin[inner] <= fin[inner + 1]))
                         | ((fin[inner] > fin[inner - 1]) & (fin[inner] >= fin[inner + 1]) & np.isfinite(fin[inner]))]
             ext = ext[ok[ext] & ~dense[ext]]
             new = np.concatenate([0.5 * (samples[ext - 1] + samples[ext]), 0.5 * (samples[ext] + samples[ext + 1])])
-        else:
+        elif kind == "jumps":
             jump = np.flatnonzero(_jumps(samples, fin) & ok[:-1] & ok[1:] & ~dense[:-1] & ~dense[1:]
                                   & (samples[1:] / samples[:-1] - 1 > JUMP_WIDTH))
             new = 0.5 * (samples[jump] + samples[jump + 1])
+        else:
+            low = inner[dense[inner] & ok[inner] & (fin[inner] <= fin[inner - 1]) & (fin[inner] <= fin[inner + 1])
+                        & np.isfinite(fin[inner])]
+            new = np.concatenate([0.5 * (samples[low - 1] + samples[low]), 0.5 * (samples[low] + samples[low + 1])])
         new = np.setdiff1d(new, samples)
         if new.size == 0:
-            if round_ < REFINE_ROUNDS:
-                continue
-            break
+            continue
         tau_n = 60.0 / (teeth * new)
         at = np.searchsorted(samples, new)
         near = np.minimum(fin[np.clip(at - 1, 0, None)], fin[np.clip(at, None, samples.size - 1)])
-        if round_ < REFINE_ROUNDS:
+        a_n = np.full(new.size, np.inf)
+        f_n = np.zeros(new.size, bool)
+        c_n = np.full(new.size, np.nan)
+        todo = np.ones(new.size, bool)
+        if kind == "extrema":
             guess = np.interp(new, samples, np.where(np.isfinite(a_s), a_s, np.nan))
         else:  # from the lower side: its band may go on past the middle
             guess = near
         guess = np.where(np.isfinite(guess), guess, start[0])
-        a_n, f_n, c_n = _limits(run, tau_n, guess, np.ones(new.size, bool), warm=True)
-        _islands(run, tau_n, a_n, f_n, c_n, np.minimum(guide_at(new), near), np.ones(new.size, bool))
+        if kind == "dense":
+            # Only a sample below the lobe's lowest so far can lower a window's lowest: one
+            # evaluation there settles the others (their limit is at least that depth).
+            calm = _growth(run, tau_n, guess) < 1.0
+            a_n[calm] = guess[calm]
+            f_n[calm] = flip_s[np.clip(at - 1, 0, None)][calm]
+            todo = ~calm
+        if todo.any():
+            sub = _limits(run, tau_n[todo], guess[todo], np.ones(todo.sum(), bool), warm=True)
+            _islands(run, tau_n[todo], *sub, np.minimum(guide_at(new), near)[todo], np.ones(todo.sum(), bool))
+            a_n[todo], f_n[todo], c_n[todo] = sub
         samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
         cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
-        dense, ok = cat(dense, np.zeros(new.size, bool)), cat(ok, np.ones(new.size, bool))
+        dense = cat(dense, np.full(new.size, kind == "dense"))
+        ok = cat(ok, np.ones(new.size, bool))
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
     return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
+
+
+def _vertex(x0, x1, x2, y0, y1, y2):
+    """Vertex (x, y) of the parabola through three points per column, x kept inside (x0, x2)
+    (the middle of the wider side where the parabola has no minimum there)."""
+    with np.errstate(all="ignore"):
+        den = (x0 - x1) * (y1 - y2) - (x1 - x2) * (y0 - y1)
+        x = x1 - 0.5 * ((x0 - x1) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y0 - y1)) / den
+        lo, hi = np.minimum(x0, x2), np.maximum(x0, x2)
+        fallback = 0.5 * (x1 + np.where(np.abs(x1 - x0) > np.abs(x2 - x1), x0, x2))
+        x = np.where(np.isfinite(x) & (x > lo) & (x < hi) & (den != 0), x, fallback)
+        # the parabola's value there (Lagrange form), no higher than the middle point
+        y = (y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2)) + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
+             + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
+        y = np.where(np.isfinite(y), np.clip(y, 0.5 * y1, y1), y1)
+    return x, y
 
 
 def _jumps(samples, fin) -> np.ndarray:
@@ -965,14 +1009,7 @@ def _hump_top(steps: _Steps, plan: _Plan, xs, vs, flip) -> np.ndarray:
     out = np.full(xs.shape[1], np.nan)
     act = np.arange(xs.shape[1])
     for _ in range(HUMP_ROUNDS):
-        x0, x1, x2 = xs
-        y0, y1, y2 = vs
-        with np.errstate(all="ignore"):
-            den = (x0 - x1) * (y1 - y2) - (x1 - x2) * (y0 - y1)
-            x = x1 - 0.5 * ((x0 - x1) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y0 - y1)) / den
-        lo, hi = np.minimum(x0, x2), np.maximum(x0, x2)
-        x = np.where(np.isfinite(x) & (x > lo) & (x < hi) & (np.abs(x - x1) > 1e-3 * (hi - lo)), x,
-                     0.5 * (x1 + np.where(np.abs(x1 - x0) > np.abs(x2 - x1), x0, x2)))
+        x, _ = _vertex(*xs, *vs)
         rho, _, ng, cx = _critical(_monodromy(steps.take(act), np.exp(x), plan), branches=True)
         y = np.where(flip[act], cx, ng)
         hit = rho >= 1.0
