@@ -33,9 +33,10 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from taptune.gui.blit import BlitCanvas, add_grid, steady_top
 from taptune.gui.latest import LatestOnly
 from taptune.gui.messages import show_error
-from taptune.gui.plotting import MEASURED, MODEL, PlotCanvas
+from taptune.gui.plotting import MEASURED, MODEL
 from taptune.gui.signals import emit
 from taptune.gui.stickout import StickoutSlider
 
@@ -227,7 +228,7 @@ class MachineView(QWidget):
         self.summary.setTextInteractionFlags(Qt.TextSelectableByMouse)
         # Fixed margins instead of the constrained layout: that would be solved again on
         # every render, which costs more than the plots themselves.
-        self.canvas = PlotCanvas(self, layout=None)
+        self.canvas = BlitCanvas(self)
 
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
@@ -413,12 +414,17 @@ class MachineView(QWidget):
     def draw(self, stickout_mm: float, frf, lobes) -> None:
         """The FRF (left) and the lobe diagram (right).
 
-        The axes and artists are made once and then given new data: a slider move then
-        costs one render, not a new figure and a new layout (MachineView's 0.2 s budget).
+        The axes and artists are made once and then given new data; the canvas redraws
+        only the data over a kept picture of the axes (:class:`~taptune.gui.blit.BlitCanvas`)
+        as long as the limits stay: each y axis keeps its round top while the curve fits
+        (:func:`~taptune.gui.blit.steady_top`), so a drag redraws the ticks only now and then.
         """
         if self._artists is None:
             self._make_axes()
         art = self._artists
+        context = (id(self.source), id(self.machine), self.cut())
+        fresh = art["context"] != context  # another holder, machine or cut: fit the axes again
+        art["context"] = context
         f_khz = frf.freq_hz / 1e3
         gx, gy = np.abs(frf.xx) * 1e6, np.abs(frf.yy) * 1e6
         art["x"].set_data(f_khz, gx)
@@ -429,19 +435,18 @@ class MachineView(QWidget):
         if mode is not None:
             art["mode"].xy = (mode.hz / 1e3, mode.magnitude * 1e6)
             art["mode"].set_text(f"{mode.hz:,.0f} Hz ({mode.direction})")
-        art["ax_f"].set_xlim(f_khz[0], f_khz[-1])
-        art["ax_f"].set_ylim(0, 1.15 * max(gx.max(), gy.max()))
-        art["ax_f"].set_title(f"Tool-point FRF at {stickout_mm:.1f} mm", loc="left")
+        ax_f = art["ax_f"]
+        if fresh or ax_f.get_xlim() != (f_khz[0], f_khz[-1]):
+            ax_f.set_xlim(f_khz[0], f_khz[-1])
+        top = steady_top(1.15 * max(gx.max(), gy.max()), None if fresh else ax_f.get_ylim()[1])
+        if ax_f.get_ylim() != (0, top):
+            ax_f.set_ylim(0, top)
+        ax_f.set_title(f"Tool-point FRF at {stickout_mm:.1f} mm", loc="left")
 
         ax_l = art["ax_l"]
         a_mm = np.where(np.isfinite(lobes.a_lim), lobes.a_lim / MM, np.nan)
-        if art["stable"] is not None:
-            art["stable"].remove()
-        art["stable"] = ax_l.fill_between(lobes.rpm, 0, a_mm, color=STABLE, lw=0, zorder=0)
-        for key in ("band",):
-            if art[key] is not None:
-                art[key].remove()
-                art[key] = None
+        art["stable"].set_data(lobes.rpm, 0, a_mm)
+        art["band"].set_visible(False)
         art["safe"].set_data([], [])
         art["boundary"].set_data(lobes.rpm, a_mm)
         cap = lobes.depth_cap / MM
@@ -453,10 +458,14 @@ class MachineView(QWidget):
         best = lobes.pockets[0] if lobes.pockets else None
         self._mark(a_crit, None if best is None else (best[0], best[1] / MM, f"{best[0]:,.0f} rpm\n{best[1] / MM:.2g} mm"))
         top = max(a / MM for _, a in lobes.pockets) if lobes.pockets else 4 * a_crit
-        ax_l.set_ylim(0, min(1.3 * top, 12 * a_crit, 1.1 * cap if np.isfinite(cap) else np.inf))
-        ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
+        need = min(1.3 * top, 12 * a_crit, 1.1 * cap if np.isfinite(cap) else np.inf)
+        top = steady_top(need, None if fresh else ax_l.get_ylim()[1])
+        if ax_l.get_ylim() != (0, top):
+            ax_l.set_ylim(0, top)
+        if fresh or ax_l.get_xlim() != (lobes.rpm[0], lobes.rpm[-1]):
+            ax_l.set_xlim(lobes.rpm[0], lobes.rpm[-1])
         self.cut_panel.mark(ax_l)  # the observed cuts, ✓ / ✗
-        self.canvas.draw_idle()
+        self.canvas.render()
 
     def draw_refined(self, lobes, band) -> None:
         """The semi-discretization boundary, the shaded band, the safe depth and the best safe pocket over the preview."""
@@ -467,15 +476,11 @@ class MachineView(QWidget):
         cap = lobes.depth_cap
         capped = np.minimum(lobes.a_lim, cap)  # stable up to the flute length: the cap, not a gap
         a_mm = np.where(np.isfinite(capped), capped / MM, np.nan)
-        if art["stable"] is not None:
-            art["stable"].remove()
-        art["stable"] = ax_l.fill_between(lobes.rpm, 0, a_mm, color=STABLE, lw=0, zorder=0)
-        if art["band"] is not None:
-            art["band"].remove()
-            art["band"] = None
-        if band.samples > 1:
-            art["band"] = ax_l.fill_between(band.rpm, band.a_low / MM, band.a_high / MM, color="#f5c16c", alpha=0.5,
-                                            lw=0, zorder=0.5)
+        art["stable"].set_data(lobes.rpm, 0, a_mm)
+        with_band = band.samples > 1
+        art["band"].set_visible(with_band)
+        if with_band:
+            art["band"].set_data(band.rpm, band.a_low / MM, band.a_high / MM)
             art["safe"].set_data(band.rpm, band.a_safe / MM)
         art["boundary"].set_data(lobes.rpm, a_mm)
         best = band.safe_pockets[0] if band.safe_pockets else None
@@ -485,13 +490,15 @@ class MachineView(QWidget):
         kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
         ax_l.set_title(f"Stability lobes ({kind})", loc="left")
         self.cut_panel.mark(ax_l)
-        self.canvas.draw_idle()
+        self.canvas.render()
 
     def _mark(self, a_crit_mm: float, best) -> None:
-        """The critical-depth line and the best pocket ``(rpm, a [mm], label)`` (None: no marker)."""
+        """The critical-depth line with its depth written on it, and the best pocket ``(rpm, a [mm], label)``
+        (None: no marker)."""
         art = self._artists
         art["crit"].set_ydata([a_crit_mm, a_crit_mm])
-        art["legend"].get_texts()[1].set_text(f"stable at any speed: {a_crit_mm:.2g} mm")
+        art["crit_note"].set_y(a_crit_mm)
+        art["crit_note"].set_text(f"{a_crit_mm:.2g} mm")
         art["pocket"].set_visible(best is not None)
         art["pocket_note"].set_visible(best is not None)
         if best is not None:
@@ -501,20 +508,28 @@ class MachineView(QWidget):
             art["pocket_note"].set_text(text)
 
     def _make_axes(self) -> None:
+        from matplotlib.transforms import blended_transform_factory
+
         fig = self.canvas.figure
         fig.clear()
+        self.canvas.invalidate()
         fig.subplots_adjust(left=0.065, right=0.99, bottom=0.11, top=0.92, wspace=0.2)
         with self.canvas.styled():
             ax_f, ax_l = fig.subplots(1, 2, width_ratios=(2, 3))
+            grids = [add_grid(ax) for ax in (ax_f, ax_l)]
             x, = ax_f.plot([], [], color=MEASURED, lw=1.1, label="x")
             y, = ax_f.plot([], [], color=MODEL, lw=1.0, ls="--", label="y")
             mode = ax_f.annotate("", (0, 0), xytext=(5, -3), textcoords="offset points", fontsize=8,
                                  color="#333333")
             ax_f.set_xlabel("frequency [kHz]")
             ax_f.set_ylabel("|G| at the tool point [µm/N]")
-            ax_f.legend(loc="upper right", framealpha=0.9)
+            ax_f.legend(loc="upper right", framealpha=1.0)
+            stable = ax_l.fill_between([], [], [], color=STABLE, lw=0, zorder=0)
+            band = ax_l.fill_between([], [], [], color="#f5c16c", alpha=0.5, lw=0, zorder=0.5)
             boundary, = ax_l.plot([], [], color=MEASURED, lw=1.0, label="stability limit")
-            crit = ax_l.axhline(0.0, color=MODEL, lw=0.9, ls="--", label="stable at any speed")
+            crit = ax_l.axhline(0.0, color=MODEL, lw=0.9, ls="--", label="critical depth (central)")
+            crit_note = ax_l.text(0.995, 0.0, "", transform=blended_transform_factory(ax_l.transAxes, ax_l.transData),
+                                  ha="right", va="bottom", fontsize=8, color=MODEL)
             pocket, = ax_l.plot([], [], "v", color=MODEL, ms=7)
             safe, = ax_l.plot([], [], color="#2c3e50", lw=0.9, ls="--", label="safe depth (band)")
             cap = ax_l.axhline(0.0, color="#7f8c8d", lw=1.0, ls=":", label="flute length")
@@ -522,10 +537,10 @@ class MachineView(QWidget):
                                         va="bottom", fontsize=8, color=MODEL)
             ax_l.set_xlabel("spindle speed [rpm]")
             ax_l.set_ylabel("axial depth of cut [mm]")
-            legend = ax_l.legend(loc="upper left", framealpha=0.9)
+            legend = ax_l.legend(loc="upper left", framealpha=1.0)
         self._artists = dict(ax_f=ax_f, ax_l=ax_l, x=x, y=y, mode=mode, boundary=boundary, crit=crit,
-                             pocket=pocket, pocket_note=pocket_note, legend=legend, stable=None, band=None,
-                             safe=safe, cap=cap)
+                             crit_note=crit_note, pocket=pocket, pocket_note=pocket_note, legend=legend,
+                             stable=stable, band=band, safe=safe, cap=cap, grids=grids, context=None)
 
     def shutdown(self) -> None:
         self._updates.shutdown()
