@@ -47,6 +47,14 @@ SETTINGS_KEY = "machine/file"
 # and holder (recordings/machine, er32_d16) the boundary moves by 0.004 % (median) and
 # 0.16 % (95th percentile) from the 2 Hz grid, and the update takes 2/3 of the time.
 FRF_STEP_HZ = 5.0
+# The preview lobes take the FRF at that step within LOBE_BANDS half-power bandwidths of
+# each dominant mode the FRF reports, and every LOBE_STEP_HZ elsewhere: far from the modes
+# the limit is many times the critical depth and never sets the boundary. On the example
+# machine and holder (stick-outs 45–65 mm; 4 teeth ae 4 mm down, 2 teeth slotting, 3 teeth
+# ae 1.6 mm up) the boundary, the critical depth and the best pocket are unchanged (under
+# 0.001 px of a 400 px plot); the lobes take ~25 % less time.
+LOBE_BANDS = 8.0
+LOBE_STEP_HZ = 20.0
 RPM_STEP = 10.0
 # Below ~2,000 rpm a milling tool's lobes are hundreds of thin ones (k up to 60 f / (N n));
 # the default diagram starts there, the user can go lower.
@@ -91,11 +99,25 @@ def compute_machine(source, machine, stickout_mm: float, cut: Cut, freq_hz=None)
     assembly = source.assembly.with_stickout(stickout_mm * MM)
     freq = frf_grid(machine) if freq_hz is None else freq_hz
     frf = toolpoint_frf(assembly, source.param_sets[0], {"x": machine.x, "y": machine.y}, freq, source.model_options)
-    lobes = stability_lobes(frf.freq_hz, frf.xx, frf.yy, teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
+    near = lobe_frequencies(frf)
+    lobes = stability_lobes(frf.freq_hz[near], frf.xx[near], frf.yy[near], teeth=cut.teeth, ktc=cut.ktc_mpa * 1e6,
                             krc=cut.krc_mpa * 1e6, diameter=cut.diameter_mm * MM, ae=cut.ae_mm * MM,
                             milling=cut.milling, rpm=frequency_grid(cut.rpm_min, cut.rpm_max, RPM_STEP),
                             method="zoa", depth_cap=depth_cap(assembly))
     return stickout_mm, frf, lobes
+
+
+def lobe_frequencies(frf) -> np.ndarray:
+    """Which frequencies of ``frf`` (bool mask) the preview lobes use: all within LOBE_BANDS
+    half-power bandwidths of each of its dominant modes, one per LOBE_STEP_HZ elsewhere."""
+    f = frf.freq_hz
+    keep = np.zeros(len(f), bool)
+    step = np.median(np.diff(f)) if len(f) > 1 else LOBE_STEP_HZ
+    keep[:: max(1, int(round(LOBE_STEP_HZ / step)))] = True
+    keep[-1] = True
+    for mode in frf.modes:
+        keep |= np.abs(f - mode.hz) <= max(LOBE_BANDS * 2 * mode.damping_ratio * mode.hz, 4 * step)
+    return keep
 
 
 def depth_cap(assembly) -> float:

@@ -166,3 +166,30 @@ def test_the_semi_discretization_and_the_band_follow_the_preview(qtbot, window, 
     assert "Safe pockets (90 %)" in view.summary.text()
     ax_l = view.canvas.figure.axes[1]
     assert view._artists["band"] is not None and len(ax_l.collections) >= 2
+
+
+def test_the_preview_lobes_use_fewer_frequencies_far_from_the_modes_and_lose_nothing(reference_assembly):
+    """The thinned FRF (full step near the modes, 20 Hz elsewhere) gives the same boundary where it is drawn."""
+    from taptune.gui.machine_view import RPM_STEP, frf_grid, lobe_frequencies
+    from taptune.io.machine import load_machine
+    from taptune.library.exchange import frequency_grid
+    from taptune.machine import stability_lobes, toolpoint_frf
+    from taptune.model.params import HolderParams
+
+    from tests.gui.conftest import HOLDER_A
+
+    machine = load_machine(MACHINE)
+    frf = toolpoint_frf(reference_assembly.with_stickout(0.060), HolderParams(**HOLDER_A),
+                        {"x": machine.x, "y": machine.y}, frf_grid(machine))
+    near = lobe_frequencies(frf)
+    assert 0.2 < near.mean() < 0.7  # far fewer frequencies, every one near the modes kept
+    for m in frf.modes:
+        assert near[np.abs(frf.freq_hz - m.hz) < 4 * m.damping_ratio * m.hz].all()
+    cut = dict(teeth=3, ktc=796e6, krc=169e6, diameter=16e-3, ae=1.6e-3, milling="up",
+               rpm=frequency_grid(2000.0, 24000.0, RPM_STEP), method="zoa")
+    full = stability_lobes(frf.freq_hz, frf.xx, frf.yy, **cut)
+    thin = stability_lobes(frf.freq_hz[near], frf.xx[near], frf.yy[near], **cut)
+    assert thin.a_crit == pytest.approx(full.a_crit, rel=1e-9)
+    shown = full.a_lim < 12 * full.a_crit  # the most the plot shows
+    np.testing.assert_allclose(thin.a_lim[shown], full.a_lim[shown], rtol=1e-6)
+    np.testing.assert_allclose(thin.pockets[:3], full.pockets[:3], rtol=1e-6)
