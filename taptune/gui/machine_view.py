@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import html
 import re
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -56,11 +57,15 @@ FRF_STEP_HZ = 5.0
 LOBE_BANDS = 8.0
 LOBE_STEP_HZ = 20.0
 RPM_STEP = 10.0
+# The semi-discretization and band (seconds on both cores) start once the stick-out has
+# rested this long: while the slider moves they would slow every preview by half.
+REFINE_DELAY_MS = 400
 # Below ~2,000 rpm a milling tool's lobes are hundreds of thin ones (k up to 60 f / (N n));
 # the default diagram starts there, the user can go lower.
 DEFAULT_RPM_MIN = 2000.0
 DEFAULT_RPM_MAX = 24000.0
 CUSTOM = "custom K_tc, K_rc"
+SUMMARY_LINES = 4
 STABLE = "#d5ecd4"
 
 
@@ -145,6 +150,26 @@ def compute_refined(source, stickout_mm: float, frf, cut: Cut, confidence: float
     return stickout_mm, cut, lobes, observed.band
 
 
+def warm_up() -> threading.Thread:
+    """Import what the preview and its refinement use (~1 s when cold), in a background thread.
+
+    Started when the view is made, so that the first picture and the first slider move do
+    not wait for imports (the first ``compute_machine`` took 1.2 s cold, 0.06 s warm).
+    """
+    def imports() -> None:
+        import scipy.interpolate  # noqa: F401  (the lobes' spline; slow to import)
+        import scipy.sparse.linalg  # noqa: F401  (the holder's modes)
+
+        import taptune.identify.core  # noqa: F401
+        import taptune.machine  # noqa: F401
+        import taptune.machine.band  # noqa: F401
+        import taptune.machine.observed  # noqa: F401
+
+    thread = threading.Thread(target=imports, name="machine-view warm-up", daemon=True)
+    thread.start()
+    return thread
+
+
 def tool_teeth(name: str) -> int | None:
     """Number of teeth written in a tool's name ("D16 4FL", "3-flute", "Z4"), or None."""
     m = re.search(r"(\d+)\s*-?\s*(?:FL\b|flutes?\b|teeth\b|T\b)|\bZ\s*(\d+)\b", name, re.IGNORECASE)
@@ -197,6 +222,11 @@ class MachineView(QWidget):
         self._updates = LatestOnly(self._show, self._failed, self)
         self._refines = LatestOnly(self._show_refined, self._refine_failed, self)
         self.refined_result = None
+        self._refine_timer = QTimer(self)
+        self._refine_timer.setSingleShot(True)
+        self._refine_timer.setInterval(REFINE_DELAY_MS)
+        self._refine_timer.timeout.connect(self._refine)
+        self.warming = warm_up()  # imports, off the slider's path
 
         self.machine_label = QLabel()
         self.machine_label.setWordWrap(True)
@@ -248,6 +278,11 @@ class MachineView(QWidget):
         self.summary = QLabel()
         self.summary.setWordWrap(True)
         self.summary.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        self.summary.setAlignment(Qt.AlignLeft | Qt.AlignTop)
+        # Room for the refined summary (safe pockets and the band's make-up) from the start, and
+        # then for the longest one so far: a summary that grows and shrinks would resize the
+        # plot at each slider move, and a resize redraws it whole.
+        self.summary.setMinimumHeight(SUMMARY_LINES * self.summary.fontMetrics().lineSpacing() + 4)
         # Fixed margins instead of the constrained layout: that would be solved again on
         # every render, which costs more than the plots themselves.
         self.canvas = BlitCanvas(self)
@@ -393,12 +428,13 @@ class MachineView(QWidget):
 
     @property
     def refining(self) -> bool:
-        """True while the semi-discretization and the band of the preview are computed."""
-        return self._refines.busy
+        """True while the semi-discretization and the band of the preview wait to start or are computed."""
+        return self._refine_timer.isActive() or self._refines.busy
 
     def request(self, *_args) -> None:
         """Compute the FRF and lobes at the current stick-out and cut (latest request wins)."""
         if self.machine is not None and self.source is not None:
+            self._refine_timer.stop()  # the refinement waits for the slider to rest
             self._updates.request(compute_machine, self.source, self.machine, self.spin.value(), self.cut())
 
     def _failed(self, message: str) -> None:
@@ -415,6 +451,12 @@ class MachineView(QWidget):
         self.summary.setText(summary_text(self.source, frf, lobes) + " <i>Semi-discretization and band follow…</i>")
         self.draw(stickout_mm, frf, lobes)
         emit(self.updated, result)
+        self._refine_timer.start()  # (again): the refinement of the picture the slider rests on
+
+    def _refine(self) -> None:
+        if self.result is None or self.source is None:
+            return
+        stickout_mm, frf, _lobes = self.result
         self._refines.request(compute_refined, self.source, stickout_mm, frf, self.cut(), 0.9,
                              self.cut_panel.observed_cuts())
 
@@ -424,8 +466,15 @@ class MachineView(QWidget):
             return  # overtaken: a newer preview asks for its own
         self.refined_result = result
         self.summary.setText(refined_text(self.source, self.result[1], lobes, band))
+        self._keep_summary_room()
         self.draw_refined(lobes, band)
         emit(self.refined, result)
+
+    def _keep_summary_room(self) -> None:
+        """Keep the summary at least as high as its longest text so far (the plot keeps its size)."""
+        needed = self.summary.heightForWidth(max(self.summary.width(), 1))
+        if needed > self.summary.minimumHeight():
+            self.summary.setMinimumHeight(needed)
 
     def _refine_failed(self, message: str) -> None:
         if self.result is not None:
@@ -565,6 +614,7 @@ class MachineView(QWidget):
                              stable=stable, band=band, safe=safe, cap=cap, grids=grids, context=None)
 
     def shutdown(self) -> None:
+        self._refine_timer.stop()
         self._updates.shutdown()
         self._refines.shutdown()
 

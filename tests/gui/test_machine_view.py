@@ -193,3 +193,20 @@ def test_the_preview_lobes_use_fewer_frequencies_far_from_the_modes_and_lose_not
     shown = full.a_lim < 12 * full.a_crit  # the most the plot shows
     np.testing.assert_allclose(thin.a_lim[shown], full.a_lim[shown], rtol=1e-6)
     np.testing.assert_allclose(thin.pockets[:3], full.pockets[:3], rtol=1e-6)
+
+
+def test_the_refinement_waits_for_the_slider_to_rest(qtbot, window, holder_a, reference_assembly):
+    """While the stick-out moves no semi-discretization starts (it would slow every preview)."""
+    from taptune.gui.machine_view import REFINE_DELAY_MS
+
+    _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    view._refine_timer.stop()  # (the first picture's refinement is not the point here)
+    qtbot.waitUntil(lambda: not view._refines.busy, timeout=120000)
+    with qtbot.waitSignal(view.updated, timeout=30000):
+        view.slider.setValue(600)
+    # The preview is drawn; its refinement waits for REFINE_DELAY_MS of rest.
+    assert view.refining and view._refine_timer.isActive() and not view._refines.busy
+    assert "follow" in view.summary.text()
+    assert view._refine_timer.interval() == REFINE_DELAY_MS
+    qtbot.waitUntil(lambda: view._refines.busy, timeout=5000)  # at rest: it starts
