@@ -620,25 +620,49 @@ class MachineView(QWidget):
 
 
 def summary_text(source, frf, lobes) -> str:
-    """One line a machinist reads first: the safe depth, the best speeds, the mode that limits."""
-    a_crit = lobes.a_crit / MM
-    pockets = ", ".join(f"{rpm:,.0f} rpm → {a / MM:.2g} mm" for rpm, a in lobes.pockets[:3])
+    """One line a machinist reads first: the critical depth, the lobe peaks, the mode that limits.
+
+    It is the zero-order preview's central estimate and says so: the semi-discretization
+    and the band that follow give the depth to trust.
+    """
+    pockets = ", ".join(f"{rpm:,.0f} rpm → {min(a, lobes.depth_cap) / MM:.2g} mm" for rpm, a in lobes.pockets[:3])
     mode = frf.modes[0] if frf.modes else None
     limit = (f"; weakest tool-point mode {mode.hz:,.0f} Hz ({mode.direction}), ζ {100 * mode.damping_ratio:.1f} %"
              if mode else "")
     return (f"<b>{source.assembly.holder.name}</b> with {source.assembly.tool.name} "
             f"(holder parameters: {source.label}). "
-            f"<b>Stable at every speed up to {a_crit:.2g} mm</b>; best speeds: {pockets or 'none in this range'}"
-            f"{limit}.")
+            f"<b>Zero-order preview, central estimate: {_every_speed(min(lobes.a_crit, lobes.depth_cap))}</b>; "
+            f"lobe peaks: {pockets or 'none in this range'}{limit}.")
 
 
 def refined_text(source, frf, lobes, band) -> str:
-    """The summary once the semi-discretization and the band are in: safe pockets first."""
+    """The summary once the semi-discretization and the band are in: safe pockets first.
+
+    With a band, the depth stable at every speed is the lowest safe depth (stable with the
+    band's confidence), and the central estimate is named as such beside it.
+    """
     cap = lobes.depth_cap
-    a_crit = min(lobes.a_crit, cap) / MM
+    central = min(lobes.a_crit, cap)
     pockets = ", ".join(f"{p.rpm_low:,.0f}–{p.rpm_high:,.0f} rpm → {p.a / MM:.2g} mm" for p in band.safe_pockets[:3])
     kind = "semi-discretization" if lobes.method == "sdm" else "zero-order"
+    p = f"{100 * band.confidence:.0f} %"
+    if band.samples > 1:
+        safe = np.minimum(np.asarray(band.a_safe, dtype=float), cap)
+        safe = safe[np.isfinite(safe)]
+        lowest = float(safe.min()) if safe.size else float("inf")
+        every = (f"{_every_speed(lowest)} with {p} confidence "
+                 f"(central estimate {_depth_mm(central)}; {kind})")
+    else:
+        every = f"{_every_speed(central)} ({kind}, central estimate: no band)"
     return (f"<b>{source.assembly.holder.name}</b> with {source.assembly.tool.name} "
-            f"(holder parameters: {source.label}). <b>Safe pockets ({100 * band.confidence:.0f} %): "
-            f"{pockets or 'none in this range'}</b>; stable at every speed up to {a_crit:.2g} mm ({kind}). "
+            f"(holder parameters: {source.label}). <b>Safe pockets ({p}): "
+            f"{pockets or 'none in this range'}</b>; {every}. "
             f"<span style='color:#555555'>Band: {html.escape(band.sources, quote=False)}.</span>")
+
+
+def _depth_mm(a: float) -> str:
+    return f"{a / MM:.2g} mm" if np.isfinite(a) else "no limit"
+
+
+def _every_speed(a: float) -> str:
+    return f"stable at every speed up to {a / MM:.2g} mm" if np.isfinite(a) else "no depth chatters in this range"

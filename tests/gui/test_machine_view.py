@@ -50,7 +50,7 @@ def test_machine_view_draws_the_frf_and_lobes_as_the_cli_computes_them(qtbot, wi
     assert len(ax_f.lines) >= 2 and ax_l.collections  # |G| in x and y; the stable region
     # The tool's diameter and teeth came from the tool ("D16 4FL"), the cut is a quarter of it.
     assert (view.diameter.value(), view.teeth.value(), view.ae.value()) == (16.0, 4, 4.0)
-    assert "Stable at every speed up to" in view.summary.text()
+    assert "Zero-order preview, central estimate: stable at every speed up to" in view.summary.text()
 
     # The CLI (2 Hz grid, 10 rpm steps) gives the same lobes to within the grid's effect.
     out = tmp_path / "lobes.json"
@@ -210,3 +210,25 @@ def test_the_refinement_waits_for_the_slider_to_rest(qtbot, window, holder_a, re
     assert "follow" in view.summary.text()
     assert view._refine_timer.interval() == REFINE_DELAY_MS
     qtbot.waitUntil(lambda: view._refines.busy, timeout=5000)  # at rest: it starts
+
+
+def test_the_refined_summary_says_which_depth_is_stable_at_every_speed():
+    """With a band, 'stable at every speed' is the lowest safe depth; the central one is named as such."""
+    from types import SimpleNamespace
+
+    from taptune.gui.machine_view import refined_text
+    from taptune.machine.band import LobeBand
+    from taptune.machine.lobes import Lobes
+
+    rpm = np.linspace(10000.0, 12000.0, 5)
+    lobes = Lobes(rpm=rpm, a_lim=np.array([1.3, 2.0, 5.0, 2.0, 1.4]) * 1e-3, chatter_hz=np.full(5, 3000.0),
+                  a_crit=1.3e-3, method="sdm", depth_cap=0.030)
+    band = LobeBand(rpm=rpm, a_safe=np.array([1.0, 1.5, 3.0, 1.6, 1.1]) * 1e-3, a_low=np.zeros(5), a_high=np.ones(5),
+                    confidence=0.9, sources="tool-point modal frequencies ±3 %", samples=64)
+    source = SimpleNamespace(label="holder A", assembly=SimpleNamespace(holder=SimpleNamespace(name="ER32"),
+                                                                         tool=SimpleNamespace(name="D16 4FL")))
+    text = refined_text(source, None, lobes, band)
+    assert "stable at every speed up to 1 mm with 90 % confidence (central estimate 1.3 mm; semi-discretization)" in text
+    no_band = refined_text(source, None, lobes, LobeBand(rpm=rpm, a_safe=lobes.a_lim, a_low=lobes.a_lim,
+                                                         a_high=lobes.a_lim, samples=1))
+    assert "stable at every speed up to 1.3 mm (semi-discretization, central estimate: no band)" in no_band
