@@ -197,14 +197,23 @@ class BlitCanvas(PlotCanvas):
         renderer.clear()
         self.figure.patch.draw(renderer)
         blank = self.copy_from_bbox(self.figure.bbox)
-        hidden = [a for ax in self.figure.axes for a in self._data(ax)]
+        # The titles are data too, but Axes.draw places them from their own extent, which an
+        # invisible text has not (it would put them off the figure): they are drawn clear.
+        titles = {id(t) for ax in self.figure.axes for t in (ax.title, ax._left_title, ax._right_title)}
+        data = [a for ax in self.figure.axes for a in self._data(ax)]
+        hidden = [a for a in data if id(a) not in titles]
+        clear = [(a, a.get_alpha()) for a in data if id(a) in titles]
         for a in hidden:
             a.set_visible(False)
+        for a, _ in clear:
+            a.set_alpha(0.0)
         try:
             super().draw()  # FigureCanvasQTAgg.draw: the Agg render, then a Qt update
         finally:
             for a in hidden:
                 a.set_visible(True)
+            for a, alpha in clear:
+                a.set_alpha(alpha)
         self._background = (key, ylims, self.copy_from_bbox(self.figure.bbox), blank)
         self._move_grids()
 

@@ -74,6 +74,9 @@ def test_data_and_y_axis_updates_draw_what_a_full_draw_draws(qtbot):
     ax_l.set_ylim(0, 8)
     canvas.render_now()
     assert canvas.renders == {"full": 1, "y axis": 0, "data": 0}
+    # The title (data: it changes with each move) stays in its place above the axes.
+    title = ax_f._left_title.get_window_extent(canvas.get_renderer())
+    assert ax_f.bbox.y1 < title.y0 < title.y1 < canvas.figure.bbox.y1
 
     _show(*parts, k=0.5)  # new data, same axes
     canvas.render_now()
