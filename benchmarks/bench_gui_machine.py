@@ -59,7 +59,7 @@ def main() -> None:
     source = PredictorSource("holder A (the published ER32 holder)", (holder_a,), assembly)
     t0 = time.perf_counter()
     if hasattr(view, "warming"):  # the imports the view starts when made (the app makes it at start)
-        view.warming.join()
+        view.warming.join(60)
     warm = time.perf_counter() - t0
     t0 = time.perf_counter()
     with _waiting(app, view.updated):

@@ -151,7 +151,7 @@ def compute_refined(source, stickout_mm: float, frf, cut: Cut, confidence: float
 
 
 def warm_up() -> threading.Thread:
-    """Import what the preview and its refinement use (~1 s when cold), in a background thread.
+    """Import what the preview uses (~1 s when cold), in a background thread.
 
     Started when the view is made, so that the first picture and the first slider move do
     not wait for imports (the first ``compute_machine`` took 1.2 s cold, 0.06 s warm).
@@ -160,10 +160,7 @@ def warm_up() -> threading.Thread:
         import scipy.interpolate  # noqa: F401  (the lobes' spline; slow to import)
         import scipy.sparse.linalg  # noqa: F401  (the holder's modes)
 
-        import taptune.identify.core  # noqa: F401
-        import taptune.machine  # noqa: F401
-        import taptune.machine.band  # noqa: F401
-        import taptune.machine.observed  # noqa: F401
+        import taptune.machine  # noqa: F401  (the refinement's modules load in its own worker, after a rest)
 
     thread = threading.Thread(target=imports, name="machine-view warm-up", daemon=True)
     thread.start()
