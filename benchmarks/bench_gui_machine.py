@@ -102,6 +102,10 @@ def _live(app, view, args) -> None:
     while view.refining and time.perf_counter() < end:  # the first picture's refinement
         app.processEvents()
         time.sleep(0.005)
+    end = time.perf_counter() + 1.0  # then a look at it before the drag
+    while time.perf_counter() < end:
+        app.processEvents()
+        time.sleep(0.005)
     load = os.getloadavg()[0]
     waits, missed, refines = [], 0, []
     view.refined.connect(lambda _r: refines.append(1))
