@@ -65,7 +65,7 @@ REFINE_DELAY_MS = 400
 DEFAULT_RPM_MIN = 2000.0
 DEFAULT_RPM_MAX = 24000.0
 CUSTOM = "custom K_tc, K_rc"
-SUMMARY_LINES = 4
+SUMMARY_LINES = 3
 STABLE = "#d5ecd4"
 
 
@@ -116,6 +116,8 @@ def lobe_frequencies(frf) -> np.ndarray:
     """Which frequencies of ``frf`` (bool mask) the preview lobes use: all within LOBE_BANDS
     half-power bandwidths of each of its dominant modes, one per LOBE_STEP_HZ elsewhere."""
     f = frf.freq_hz
+    if not frf.modes:  # no peak to keep sharp: every frequency
+        return np.ones(len(f), bool)
     keep = np.zeros(len(f), bool)
     step = np.median(np.diff(f)) if len(f) > 1 else LOBE_STEP_HZ
     keep[:: max(1, int(round(LOBE_STEP_HZ / step)))] = True
