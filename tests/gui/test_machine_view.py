@@ -50,7 +50,7 @@ def test_machine_view_draws_the_frf_and_lobes_as_the_cli_computes_them(qtbot, wi
     assert len(ax_f.lines) >= 2 and ax_l.collections  # |G| in x and y; the stable region
     # The tool's diameter and teeth came from the tool ("D16 4FL"), the cut is a quarter of it.
     assert (view.diameter.value(), view.teeth.value(), view.ae.value()) == (16.0, 4, 4.0)
-    assert "Stable at every speed up to" in view.summary.text()
+    assert "Zero-order preview, central estimate: stable at every speed up to" in view.summary.text()
 
     # The CLI (2 Hz grid, 10 rpm steps) gives the same lobes to within the grid's effect.
     out = tmp_path / "lobes.json"
@@ -166,3 +166,69 @@ def test_the_semi_discretization_and_the_band_follow_the_preview(qtbot, window, 
     assert "Safe pockets (90 %)" in view.summary.text()
     ax_l = view.canvas.figure.axes[1]
     assert view._artists["band"] is not None and len(ax_l.collections) >= 2
+
+
+def test_the_preview_lobes_use_fewer_frequencies_far_from_the_modes_and_lose_nothing(reference_assembly):
+    """The thinned FRF (full step near the modes, 20 Hz elsewhere) gives the same boundary where it is drawn."""
+    from taptune.gui.machine_view import RPM_STEP, frf_grid, lobe_frequencies
+    from taptune.io.machine import load_machine
+    from taptune.library.exchange import frequency_grid
+    from taptune.machine import stability_lobes, toolpoint_frf
+    from taptune.model.params import HolderParams
+
+    from tests.gui.conftest import HOLDER_A
+
+    machine = load_machine(MACHINE)
+    frf = toolpoint_frf(reference_assembly.with_stickout(0.060), HolderParams(**HOLDER_A),
+                        {"x": machine.x, "y": machine.y}, frf_grid(machine))
+    near = lobe_frequencies(frf)
+    assert 0.2 < near.mean() < 0.7  # far fewer frequencies, every one near the modes kept
+    for m in frf.modes:
+        assert near[np.abs(frf.freq_hz - m.hz) < 4 * m.damping_ratio * m.hz].all()
+    cut = dict(teeth=3, ktc=796e6, krc=169e6, diameter=16e-3, ae=1.6e-3, milling="up",
+               rpm=frequency_grid(2000.0, 24000.0, RPM_STEP), method="zoa")
+    full = stability_lobes(frf.freq_hz, frf.xx, frf.yy, **cut)
+    thin = stability_lobes(frf.freq_hz[near], frf.xx[near], frf.yy[near], **cut)
+    assert thin.a_crit == pytest.approx(full.a_crit, rel=1e-9)
+    shown = full.a_lim < 12 * full.a_crit  # the most the plot shows
+    np.testing.assert_allclose(thin.a_lim[shown], full.a_lim[shown], rtol=1e-6)
+    np.testing.assert_allclose(thin.pockets[:3], full.pockets[:3], rtol=1e-6)
+
+
+def test_the_refinement_waits_for_the_slider_to_rest(qtbot, window, holder_a, reference_assembly):
+    """While the stick-out moves no semi-discretization starts (it would slow every preview)."""
+    from taptune.gui.machine_view import REFINE_DELAY_MS
+
+    _show_on_machine(qtbot, window, reference_assembly)
+    view = window.machine
+    view._refine_timer.stop()  # (the first picture's refinement is not the point here)
+    qtbot.waitUntil(lambda: not view._refines.busy, timeout=120000)
+    with qtbot.waitSignal(view.updated, timeout=30000):
+        view.slider.setValue(600)
+    # The preview is drawn; its refinement waits for REFINE_DELAY_MS of rest.
+    assert view.refining and view._refine_timer.isActive() and not view._refines.busy
+    assert "follow" in view.summary.text()
+    assert view._refine_timer.interval() == REFINE_DELAY_MS
+    qtbot.waitUntil(lambda: view._refines.busy, timeout=5000)  # at rest: it starts
+
+
+def test_the_refined_summary_says_which_depth_is_stable_at_every_speed():
+    """With a band, 'stable at every speed' is the lowest safe depth; the central one is named as such."""
+    from types import SimpleNamespace
+
+    from taptune.gui.machine_view import refined_text
+    from taptune.machine.band import LobeBand
+    from taptune.machine.lobes import Lobes
+
+    rpm = np.linspace(10000.0, 12000.0, 5)
+    lobes = Lobes(rpm=rpm, a_lim=np.array([1.3, 2.0, 5.0, 2.0, 1.4]) * 1e-3, chatter_hz=np.full(5, 3000.0),
+                  a_crit=1.3e-3, method="sdm", depth_cap=0.030)
+    band = LobeBand(rpm=rpm, a_safe=np.array([1.0, 1.5, 3.0, 1.6, 1.1]) * 1e-3, a_low=np.zeros(5), a_high=np.ones(5),
+                    confidence=0.9, sources="tool-point modal frequencies ±3 %", samples=64)
+    source = SimpleNamespace(label="holder A", assembly=SimpleNamespace(holder=SimpleNamespace(name="ER32"),
+                                                                         tool=SimpleNamespace(name="D16 4FL")))
+    text = refined_text(source, None, lobes, band)
+    assert "stable at every speed up to 1 mm with 90 % confidence (central estimate 1.3 mm; semi-discretization)" in text
+    no_band = refined_text(source, None, lobes, LobeBand(rpm=rpm, a_safe=lobes.a_lim, a_low=lobes.a_lim,
+                                                         a_high=lobes.a_lim, samples=1))
+    assert "stable at every speed up to 1.3 mm (semi-discretization, central estimate: no band)" in no_band
