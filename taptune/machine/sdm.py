@@ -42,24 +42,31 @@ The discretisation:
 The limit at one speed is the smallest depth whose largest multiplier reaches 1, found
 by bracketing then regula falsi on log|μ| (bracket ``DEPTH_RTOL``, the root interpolated
 inside it), vectorised over the speeds. Where lobes overlap, depth can be unstable in an
-island below a stable band: a limit far above the zero-order guide is checked at the
-guide's depth and searched again from below when that depth chatters. Where a flip lobe
-meets a Hopf lobe, the band below one kind's crossing chatters by the other kind: the
-multipliers at the last stable depth tell (the flip branch, −min Re μ, or a complex |μ|
-near 1 under a flip crossing), and there the search walks down from the limit in steps
-of CHECK_RATIO while that branch stays near the circle or |μ| grows downward. Large jobs are
-split into speed ranges of equal work run in forked processes (``workers``, from the
-main thread only).
+island below a stable band (or a weakly unstable band, |μ| barely above 1, under a stable
+one): a limit far above the guide (the zero-order limit or the neighbours') is checked at
+fractions of the guide and on up towards the limit in steps of ``ISLAND_STEP``, and searched
+again from below when one of those depths chatters. Where a flip lobe meets a Hopf lobe, the
+band below one kind's crossing chatters by the other kind: the multipliers at the last
+stable depth tell (the flip branch, −min Re μ, or a complex |μ| near 1 under a flip
+crossing), and there the search walks down from the limit in steps of CHECK_RATIO while
+that branch stays near the circle or |μ| grows downward; a branch that rises and falls
+again along the walk is searched for its top (parabola in log depth). Large jobs are
+split into speed ranges of about equal time run in forked processes (``workers``, from the
+main thread only; the ranges overlap by ``SEAM_OVERLAP`` and each keeps its side of a seam).
 SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
 fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in relative speed
-(flip lobes are narrow), and interpolated onto
-the requested grid (linear in the tooth period). Where lobes are narrower than the speed
+(flip lobes are narrow), searched coarse first then midpoints (each from its neighbours'
+limits), refined beside local extrema, narrowed down where the limit jumps between
+neighbours (``JUMP_RATIO``; the grid across a jump takes the lower side), and interpolated
+onto the requested grid (linear in the tooth period). Where lobes are narrower than the speed
 window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
-``REL_SPACING_DENSE`` and the limit reported is the lowest over that window; there a
-sample that is stable at the highest limit computed nearby cannot lower that lowest and
-is settled by that one evaluation. ``budget`` bounds the work (:func:`_cost`) from the
-fastest speed down (``AUTO_BUDGET`` for ``method="auto"``); slower speeds are left to
-the zero-order lobes with a warning naming the speed.
+``REL_SPACING_DENSE``, each local minimum gets ``DENSE_ROUNDS`` rounds of samples beside it
+(a lobe's bottom is narrower than that spacing), and the limit reported is the lowest over
+that window; there a sample that is stable at the highest limit computed nearby (or at the
+local minimum's depth) cannot lower that lowest and is settled by that one evaluation.
+``budget`` bounds the work (:func:`_cost`) from the fastest speed down (``AUTO_BUDGET`` for
+``method="auto"``); slower speeds are left to the zero-order lobes with a warning naming
+the speed.
 
 Signatures::
 
@@ -88,7 +95,7 @@ NODES_PER_PERIOD = 3.5
 #: Above this many nodes the speed is left to the zero-order lobes (a warning says where).
 MAX_NODES = 140
 #: Width of the final depth bracket (relative); the limit is interpolated inside it (log|μ| is
-#: smooth in log a away from lobe crossings: median error ~1e-7, largest 0.4 % at crossings).
+#: smooth in log a away from lobe crossings; at a crossing the error stays inside the bracket).
 DEPTH_RTOL = 2e-2
 #: Speed sampling: per lobe of the fastest mode, and the bounds of the relative spacing.
 SAMPLES_PER_LOBE = 16
@@ -545,12 +552,65 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
     budget = np.inf if budget is None else float(budget)
     if not _worth_processes(modes_x, modes_y, speeds, cut, workers, budget):
-        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=None, budget=budget, **cut)
+        return _on_grid(speeds, *_sdm_samples(modes_x, modes_y, rpm=speeds, guide=guide, budget=budget, **cut))
+    return _on_grid(speeds, *_sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers))
+
+
+#: The speed ranges of :func:`_sdm_parts` overlap by this much (relative) on either side of a seam,
+#: and are cut where their work, SPLIT_FIXED + (map size)² per sample, is equal.
+SEAM_OVERLAP = 0.04
+SPLIT_FIXED = 6000.0
+_PARTS = None  # what forked part processes compute (inherited, not pickled: the guide is any callable)
+
+
+def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers):
+    """:func:`_sdm_samples` in ``workers`` forked processes, each on a speed range of equal
+    work (:func:`_cost`, within ``budget`` from the fastest down) and overlapping its
+    neighbours by SEAM_OVERLAP; each side of a seam keeps its own samples. One fork and no
+    exchange between the parts: the phases of one range (neighbours guess each other's
+    limits, islands, jumps, lobe bottoms) run without waiting for the others."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-        return _sdm_lobes(modes_x, modes_y, rpm=speeds, guide=guide, pool=pool, budget=budget, **cut)
+    global _PARTS
+    lo, hi = float(speeds.min()), float(speeds.max())
+    samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
+    work = _cost(modes_x, modes_y, samples, cut)
+    work = np.where(np.cumsum(work[::-1])[::-1] <= budget, work, 0.0)  # what the budget leaves to the ZOA
+    # Time per sample ≈ a fixed part (the search's Python, small arrays) + ∝ the map's size²
+    # (measured: 0.2 ms an evaluation at n = 38, 2.9 ms at n = 246).
+    cols = _modal(modes_x, modes_y)
+    geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
+    p = np.ceil(MIN_NODES + NODES_PER_PERIOD * geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols))
+    cum = np.cumsum(np.where(work > 0, (2 * len(cols[1]) + 2 * (p + 1)) ** 2 + SPLIT_FIXED, 0.0))
+    seams = [float(samples[min(np.searchsorted(cum, cum[-1] * k / workers), samples.size - 1)]) for k in range(1, workers)]
+    edges = [lo] + seams + [hi]
+    parts = []
+    for k in range(workers):
+        a, b = edges[k] * (1 - SEAM_OVERLAP if k else 1), edges[k + 1] * (1 + SEAM_OVERLAP if k < workers - 1 else 1)
+        part = speeds[(speeds >= a) & (speeds <= b)]
+        # the work of the faster parts comes out of the budget first (it runs from the fastest down)
+        spent = float(np.sum(work[samples > edges[k + 1]]))
+        parts.append((part, budget - spent if np.isfinite(budget) else budget))
+    _PARTS = (modes_x, modes_y, guide, cut, parts)
+    try:
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
+            out = list(pool.map(_sdm_part, range(workers)))
+    finally:
+        _PARTS = None
+    keep = [(out[k][0] >= edges[k] if k else out[k][0] > -1) & (out[k][0] < edges[k + 1] if k < workers - 1 else True)
+            for k in range(workers)]
+    merged = [np.concatenate([o[i][m] for o, m in zip(out, keep)]) for i in range(6)]
+    warnings = tuple(dict.fromkeys(w for o in out for w in o[6]))
+    return (*merged, warnings)
+
+
+def _sdm_part(k: int):
+    modes_x, modes_y, guide, cut, parts = _PARTS
+    part, budget = parts[k]
+    if part.size == 0:
+        return tuple(np.zeros(0, t) for t in (float, bool, bool, float, bool, float)) + ((),)
+    return _sdm_samples(modes_x, modes_y, rpm=part, guide=guide, budget=budget, **cut)
 
 
 def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
@@ -586,10 +646,10 @@ def _worth_processes(modes_x, modes_y, speeds, cut, workers, budget) -> bool:
     return min(float(np.sum(_cost(modes_x, modes_y, samples, cut))), budget) >= PARALLEL_WORK
 
 
-def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide, pool,
-               budget=np.inf) -> SdmLobes:
-    """:func:`sdm_lobes` (``rpm`` checked); the batches of each phase go to ``pool`` if given
-    (every speed's search is independent of its batch, so the result is the same)."""
+def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide,
+                 budget=np.inf):
+    """The sampled limits of :func:`sdm_lobes` (``rpm`` checked): (sample speeds, dense, ok,
+    limits, flip, chatter frequencies, warnings), for :func:`_on_grid`."""
     speeds = np.asarray(rpm, dtype=float)
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
@@ -629,7 +689,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
     k_min = np.min(cols[3])
     fallback = 2 * k_min * np.min(cols[2]) / ktc  # a static-like scale [m]
     start = np.where(np.isfinite(start) & (start > 0), start, fallback)
-    run = (cols, geom, teeth, ktc, krc, f_res, depth_cap, pool)
+    run = (cols, geom, teeth, ktc, krc, f_res, depth_cap)
     # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
     # tight first bracket: about half the evaluations).
     coarse = np.zeros(samples.size, bool)
@@ -704,8 +764,9 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
             # Only a sample below the lobe's lowest so far can lower a window's lowest: one
             # evaluation there settles the others (their limit is at least that depth).
             calm = _growth(run, tau_n, guess) < 1.0
-            a_n[calm] = guess[calm]
-            f_n[calm] = flip_s[np.clip(at - 1, 0, None)][calm]
+            low_side = np.where(fin[np.clip(at - 1, 0, None)] <= fin[np.clip(at, None, samples.size - 1)],
+                                np.clip(at - 1, 0, None), np.clip(at, None, samples.size - 1))
+            a_n[calm], f_n[calm], c_n[calm] = guess[calm], flip_s[low_side][calm], chat_s[low_side][calm]
             todo = ~calm
         if todo.any():
             sub = _limits(run, tau_n[todo], guess[todo], np.ones(todo.sum(), bool), warm=True)
@@ -718,7 +779,7 @@ def _sdm_lobes(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm,
         ok = cat(ok, np.ones(new.size, bool))
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
-    return _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings))
+    return samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings)
 
 
 def _vertex(x0, x1, x2, y0, y1, y2):
@@ -775,30 +836,15 @@ def _screen_dense(run, samples, tau, cand, known, a_s, flip_s, chat_s):
 def _limits(run, tau, start, ok, warm: bool = False):
     """Limit, flip flag and chatter frequency at each tooth period ``tau`` where ``ok``
     (``warm``: ``start`` is a close guess, :func:`_search`)."""
-    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    cols, geom, teeth, ktc, krc, f_max, depth_cap = run
     a_s = np.full(tau.size, np.inf)
     flip_s = np.zeros(tau.size, bool)
     chat_s = np.full(tau.size, np.nan)
     batches = _batches(run, tau, np.flatnonzero(ok))
     jobs = [(cols, geom, teeth, ktc, krc, tau[c], start[c], depth_cap, plan, warm) for c, plan in batches]
-    for (chunk, _), out in zip(batches, _run_jobs(pool, _search, jobs, batches)):
+    for (chunk, _), out in zip(batches, (_search(*j) for j in jobs)):
         a_s[chunk], flip_s[chunk], chat_s[chunk] = out
     return a_s, flip_s, chat_s
-
-
-def _star(job):
-    fn, args = job
-    return fn(*args)
-
-
-def _run_jobs(pool, fn, jobs, batches) -> list:
-    """``fn(*job)`` for each job, in ``pool`` when given (largest batches first)."""
-    if pool is None or len(jobs) < 2:
-        return [fn(*j) for j in jobs]
-    size = [c.size * len(plan.edges) * len(plan.nodes) ** 2 for c, plan in batches]
-    order = np.argsort(size)[::-1]
-    done = dict(zip(order, pool.map(_star, [(fn, jobs[i]) for i in order])))
-    return [done[i] for i in range(len(jobs))]
 
 
 def _neighbour_min(a) -> np.ndarray:
@@ -833,7 +879,7 @@ def _islands(run, tau, a_s, flip_s, chat_s, guide_a, ok) -> None:
 
 def _batches(run, tau, idx):
     """Batches of similar node count (GROUP_SPREAD) among the speeds ``idx``: [(indices, plan)]."""
-    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    cols, geom, teeth, ktc, krc, f_max, depth_cap = run
     periods = geom[2] * tau * f_max
     order = idx[np.argsort(periods[idx], kind="stable")]
     out = []
@@ -847,11 +893,11 @@ def _batches(run, tau, idx):
 
 def _growth(run, tau, depth) -> np.ndarray:
     """Largest |μ| at tooth periods ``tau`` and depths ``depth`` (one each)."""
-    cols, geom, teeth, ktc, krc, f_max, depth_cap, pool = run
+    cols, geom, teeth, ktc, krc, f_max, depth_cap = run
     rho = np.empty(tau.size)
     batches = _batches(run, tau, np.arange(tau.size))
     jobs = [(cols, geom, teeth, ktc, krc, tau[c], depth[c], plan) for c, plan in batches]
-    for (chunk, _), out in zip(batches, _run_jobs(pool, _growth_batch, jobs, batches)):
+    for (chunk, _), out in zip(batches, (_growth_batch(*j) for j in jobs)):
         rho[chunk] = out
     return rho
 
@@ -1069,8 +1115,10 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
             lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
             hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")
             in_dense = dense[near]
-            for i in np.flatnonzero(in_dense):
-                a[i] = np.min(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)])
+            for i in np.flatnonzero(in_dense):  # the lowest in the window, with its kind and frequency
+                j = lo_w[i] + int(np.argmin(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)]))
+                a[i], fl[i] = a_s[j], flip_s[j]
+                ch[i] = chat_s[j] * grid[i] / samples[j] if flip_s[j] else chat_s[j]
         a = np.where(ok[near] & (grid >= samples[ok].min() if ok.any() else False), a, np.nan)  # left to the ZOA
     out_a, out_f, out_c = np.empty(grid.size), np.empty(grid.size, bool), np.empty(grid.size)
     out_a[order], out_f[order], out_c[order] = a, fl, ch
