@@ -272,6 +272,8 @@ LOW_RES = dict(per_period=2, degree=8)
 LOW_LADDER = ((1, 6), (1, 8), (2, 8), (2, 10), (3, 12))
 #: … its samples per lobe of the fastest mode inside a window (each local minimum then refined) …
 LOBE_SAMPLES = 5
+#: … the relative sample spacings whose window minimum is estimated from the reference's samples …
+SPACINGS = (0.01, 0.005, 0.0025)
 #: … the ratio between the centres of successive windows, and the step of the point-by-point speeds [rpm].
 WINDOW_RATIO = 1.12
 POINT_STEP = 100.0
@@ -341,6 +343,20 @@ def window_min(cache: ReferenceCache, modes, cut, lo: float, hi: float) -> dict:
 
     return cache.get(compute, "window-min", modes, cut, float(lo), float(hi), LOBE_SAMPLES,
                      sorted(LOW_RES.items()))
+
+
+def sampled_window_min(w: dict, spacing: float, phases: int = 24) -> np.ndarray:
+    """What the lowest of samples every ``spacing`` (relative speed) inside the window of
+    :func:`window_min` ``w`` would exceed the window's true lowest by, for ``phases`` offsets
+    of the samples (the reference's limit between its own samples: linear in log speed)."""
+    order = np.argsort(w["speeds"])
+    x = np.log(np.array(w["speeds"])[order])
+    y = np.array(w["limits"])[order]
+    out = []
+    for ph in np.arange(phases) / phases * spacing:
+        pts = np.arange(x[0] + ph, x[-1] + 1e-12, spacing)
+        out.append(np.interp(pts, x, y).min() / w["a"] - 1)
+    return np.array(out)
 
 
 def low_convergence(cache: ReferenceCache) -> None:
@@ -421,6 +437,12 @@ def low_compare(cache: ReferenceCache) -> list:
             print(f"         {r:5.0f} rpm ±{window:.1%}: reference lowest {w['a'] * 1e3:8.4f} mm {w['kind']:4s} at "
                   f"{w['rpm']:7.1f} rpm (at the centre {at.a_lim[j] * 1e3:8.4f} mm; refining the sampled minima: "
                   f"{w['a'] / w['sampled'] - 1:+.2%}, {len(w['speeds'])} limits); {shown}")
+        excess = [np.concatenate([sampled_window_min(w, sp) for w in wins]) for sp in SPACINGS] if wins else []
+        if excess:
+            print("      the lowest of samples every " + " / ".join(f"{sp:.2%}" for sp in SPACINGS) + " of speed in "
+                  "the windows (the reference's limits, all offsets): deeper than the lowest by median "
+                  + " / ".join(f"{np.median(e):.2%}" for e in excess) + ", at most "
+                  + " / ".join(f"{e.max():.2%}" for e in excess))
         print(f"      [reference {t_ref:.1f} s CPU (cache: {cache.hits} hits, {cache.misses} computed so far); "
               f"taptune {t_tap:.1f} s wall]", flush=True)
         rows.append((name, err, sdm, is_dense, same))
