@@ -4,8 +4,8 @@ The reference is piecewise Chebyshev collocation of the milling delay equation, 
 from the papers (Insperger & Stépán 2004 for the model; Butcher et al. 2004 and
 Khasawneh & Mann 2013 for the method) and sharing no code with taptune.machine; it
 converges exponentially with the polynomial degree. The full sweep over 5,000–25,000 rpm
-is ``benchmarks/validate_sdm.py``; here a few speeds per case at a coarser but still
-converged resolution.
+is ``benchmarks/validate_sdm.py`` (500–5,000 rpm: ``--low``); here a few speeds per case at a
+coarser but still converged resolution.
 """
 
 from __future__ import annotations
