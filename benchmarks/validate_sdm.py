@@ -426,6 +426,9 @@ def low_compare(cache: ReferenceCache) -> list:
                   f"{np.median(e):6.2%}, max {e.max():6.2%} (at {test[k]:.0f} rpm: taptune {a_t[k] * 1e3:.4g} mm, "
                   f"reference {want[k] * 1e3:.4g} mm); more than 1 % deeper at {deeper.sum()}; "
                   f"flip/Hopf alike {same[sel].sum()}/{sel.sum()}")
+        for j in np.flatnonzero(sdm & ~is_dense & (err > 0.01)):
+            print(f"         {test[j]:5.0f} rpm: taptune {a_t[j] * 1e3:.4g} mm, reference {want[j] * 1e3:.4g} mm "
+                  f"{kind[j]} ({err[j]:+.2%})")
         handed = ~sdm
         if handed.any():
             e_z = np.abs(zoa[handed] / at.a_lim[handed] - 1)
