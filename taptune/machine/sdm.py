@@ -115,6 +115,9 @@ JUMP_ROUNDS = 4
 JUMP_WIDTH = 0.0005
 #: Rounds of samples beside each local minimum where lobes are denser than the window.
 DENSE_ROUNDS = 2
+#: … where the samples are at most REL_SPACING_DENSE apart and at least this many per lobe of
+#: the most compliant mode (whose lobes are the lowest).
+DENSE_PER_LOBE = 3
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
 #: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
@@ -495,8 +498,17 @@ def _is_dense(tau, f_max: float):
     return 1.0 / (f_max * tau) < 2 * DENSE_WINDOW
 
 
-def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tuple[np.ndarray, np.ndarray]:
-    """SDM speeds (ascending) and whether each lies where the lobes are too dense to resolve."""
+def _f_dominant(cols) -> float:
+    """The frequency [Hz] of the most compliant mode (peak 1/(2ζk)): its lobes are the lowest."""
+    _, wn, z, k = cols
+    return float(wn[np.argmax(1.0 / (2 * z * k))] / (2 * np.pi))
+
+
+def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float,
+                   f_dom: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """SDM speeds (ascending) and whether each lies where the lobes are too dense to resolve
+    (there DENSE_PER_LOBE samples per lobe of the most compliant mode at ``f_dom`` [Hz], at
+    most REL_SPACING_DENSE apart)."""
     tau_lo, tau_hi = 60.0 / (rpm_hi * teeth), 60.0 / (rpm_lo * teeth)
     taus = [tau_lo]
     dense = [False]
@@ -506,7 +518,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float) -> tu
         step = float(np.clip(lobe, REL_SPACING_MIN * t, REL_SPACING_MAX * t))
         is_dense = _is_dense(t, f_max)
         if is_dense:
-            step = max(step, REL_SPACING_DENSE * t)
+            step = max(step, min(REL_SPACING_DENSE * t, 1.0 / (DENSE_PER_LOBE * f_dom)) if f_dom else REL_SPACING_DENSE * t)
         taus.append(min(t + step, tau_hi))
         dense.append(is_dense)
     taus = np.array(taus)
@@ -574,12 +586,12 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers):
 
     global _PARTS
     lo, hi = float(speeds.min()), float(speeds.max())
-    samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
+    cols = _modal(modes_x, modes_y)
+    samples, _ = _sample_speeds(lo, hi, cut["teeth"], cols[1].max() / (2 * np.pi), _f_dominant(cols))
     work = _cost(modes_x, modes_y, samples, cut)
     work = np.where(np.cumsum(work[::-1])[::-1] <= budget, work, 0.0)  # what the budget leaves to the ZOA
     # Time per sample ≈ a fixed part (the search's Python, small arrays) + ∝ the map's size²
     # (measured: 0.2 ms an evaluation at n = 38, 2.9 ms at n = 246).
-    cols = _modal(modes_x, modes_y)
     geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
     p = np.ceil(MIN_NODES + NODES_PER_PERIOD * geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols))
     cum = np.cumsum(np.where(work > 0, (2 * len(cols[1]) + 2 * (p + 1)) ** 2 + SPLIT_FIXED, 0.0))
@@ -642,7 +654,8 @@ def _worth_processes(modes_x, modes_y, speeds, cut, workers, budget) -> bool:
     # already keeps the cores busy.
     if multiprocessing.current_process().daemon:
         return False
-    samples, _ = _sample_speeds(lo, hi, cut["teeth"], _modal(modes_x, modes_y)[1].max() / (2 * np.pi))
+    cols = _modal(modes_x, modes_y)
+    samples, _ = _sample_speeds(lo, hi, cut["teeth"], cols[1].max() / (2 * np.pi), _f_dominant(cols))
     return min(float(np.sum(_cost(modes_x, modes_y, samples, cut))), budget) >= PARALLEL_WORK
 
 
@@ -659,10 +672,10 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     if hi / lo - 1 < 1e-9:
         samples, dense = np.array([lo]), np.array([False])
     else:
-        samples, dense = _sample_speeds(lo, hi, teeth, f_max)
-        if samples.size > speeds.size:  # never more work than the grid itself
-            samples = np.unique(speeds)
-            dense = _is_dense(60.0 / (teeth * samples), f_max)
+        samples, dense = _sample_speeds(lo, hi, teeth, f_max, _f_dominant(cols))
+        if samples.size > speeds.size and not dense.any():  # never more work than the grid itself
+            samples = np.unique(speeds)  # (where lobes are denser than the window, its lowest needs them all)
+            dense = np.zeros(samples.size, bool)
     tau = 60.0 / (teeth * samples)
     periods = geom[2] * tau * f_res
     p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
@@ -775,7 +788,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
         samples, order = np.unique(np.concatenate([samples, new]), return_index=True)
         cat = lambda x, y: np.concatenate([x, y])[order]  # noqa: E731
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
-        dense = cat(dense, np.full(new.size, kind == "dense"))
+        dense = cat(dense, _is_dense(tau_n, f_max))
         ok = cat(ok, np.ones(new.size, bool))
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
@@ -1096,7 +1109,21 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
         cap = np.nanmax(big) * 1e3 if np.isfinite(big).any() else 1.0
         filled = np.where(np.isfinite(a_s), a_s, cap)
         use = ok if ok.any() else np.ones(ok.size, bool)  # speeds left to the ZOA take no part
-        a = np.interp(inv_g, inv_s[use][::-1], filled[use][::-1])
+        s_use = samples[use]
+        f_use = np.where(np.isfinite(a_s[use]), a_s[use], np.inf)
+        jumps = _jumps(s_use, f_use) if s_use.size >= 2 else np.zeros(0, bool)
+
+        def line(at):
+            """Linear in the tooth period between samples; across a jump the line would claim
+            depths only the upper side has: the lower side there."""
+            out = np.interp(1.0 / at, inv_s[use][::-1], filled[use][::-1])
+            if s_use.size >= 2:
+                gap = np.clip(np.searchsorted(s_use, at) - 1, 0, s_use.size - 2)
+                at_jump = jumps[gap] & (at > s_use[gap]) & (at < s_use[gap + 1])
+                out = np.where(at_jump, np.minimum(f_use[gap], f_use[gap + 1]), out)
+            return out
+
+        a = line(grid)
         near = np.clip(np.searchsorted(samples, grid), 0, samples.size - 1)
         left = np.clip(near - 1, 0, samples.size - 1)
         near = np.where(np.abs(samples[left] - grid) < np.abs(samples[near] - grid), left, near)
@@ -1104,20 +1131,15 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
         ch = np.where(fl, ch * grid / samples[near], ch)  # a flip chatters at (k + ½) f_T of its own speed
         inf_near = ~np.isfinite(a_s[near])
         a = np.where(inf_near, np.inf, a)
-        # Across a jump the line between the two sides would claim depths only the upper side has.
-        s_use = samples[use]
-        f_use = np.where(np.isfinite(a_s[use]), a_s[use], np.inf)
-        gap = np.clip(np.searchsorted(s_use, grid) - 1, 0, max(s_use.size - 2, 0))
-        if s_use.size >= 2:
-            at_jump = _jumps(s_use, f_use)[gap] & (grid > s_use[gap]) & (grid < s_use[gap + 1])
-            a = np.where(at_jump, np.minimum(f_use[gap], f_use[gap + 1]), a)
         if dense.any():
             lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
             hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")
+            # On a steep flank the lowest lies at the window's edge, between samples.
+            edges = np.minimum(line(grid * (1 - DENSE_WINDOW)), line(grid * (1 + DENSE_WINDOW)))
             in_dense = dense[near]
             for i in np.flatnonzero(in_dense):  # the lowest in the window, with its kind and frequency
                 j = lo_w[i] + int(np.argmin(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)]))
-                a[i], fl[i] = a_s[j], flip_s[j]
+                a[i], fl[i] = min(a_s[j], edges[i]), flip_s[j]
                 ch[i] = chat_s[j] * grid[i] / samples[j] if flip_s[j] else chat_s[j]
         a = np.where(ok[near] & (grid >= samples[ok].min() if ok.any() else False), a, np.nan)  # left to the ZOA
     out_a, out_f, out_c = np.empty(grid.size), np.empty(grid.size, bool), np.empty(grid.size)
