@@ -117,7 +117,7 @@ JUMP_WIDTH = 0.0005
 DENSE_ROUNDS = 2
 #: … where the samples are at most REL_SPACING_DENSE apart and at least this many per lobe of
 #: the most compliant mode (whose lobes are the lowest).
-DENSE_PER_LOBE = 3
+DENSE_PER_LOBE = 2
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
 #: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
