@@ -13,7 +13,7 @@
     OPENBLAS_NUM_THREADS=1 QT_QPA_PLATFORM=offscreen nice -n 10 python benchmarks/bench_lobes.py [--repeat 3]
 
 CPU seconds (this process and its worker processes) and wall seconds; the load average is
-printed. The SDM shares its batches between 2 forked processes when run from the main thread.
+printed. The SDM splits the speeds into 2 ranges of about equal time, each computed in a forked process (from the main thread).
 """
 
 from __future__ import annotations

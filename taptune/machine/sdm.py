@@ -113,6 +113,9 @@ REFINE_ROUNDS = 2
 JUMP_RATIO = 1.25
 JUMP_ROUNDS = 4
 JUMP_WIDTH = 0.0005
+#: Each gap between samples is checked at its middle at DIP_RATIO × the lower side's limit (one
+#: evaluation); where that chatters, a dip lies between them and it gets a sample.
+DIP_RATIO = 0.97
 #: Rounds of samples beside each local minimum where lobes are denser than the window.
 DENSE_ROUNDS = 2
 #: … where the samples are at most REL_SPACING_DENSE apart and at least this many per lobe of
@@ -131,6 +134,7 @@ ISLAND_RATIO = 1.3
 #: the guide and a limit several times higher).
 ISLAND_LEVELS = (0.55, 0.75, 1.0)
 ISLAND_STEP = 1.25
+ISLAND_HALVINGS = 2
 #: A Hopf limit is checked for a flip band below it when a multiplier at its last stable depth
 #: reaches within CHECK_NEAR of −1 along the negative real axis, a flip limit for a Hopf band
 #: when a complex multiplier there lies within CHECK_NEAR of the unit circle …
@@ -408,6 +412,12 @@ def _critical(phi, branches: bool = False):
     reaches along the negative real axis (−min Re μ: continuous in depth, also where two real
     multipliers meet and turn into a complex pair) and the largest |μ| that is not real and
     negative (the Hopf branch)."""
+    bad = ~np.all(np.isfinite(phi), axis=(-2, -1))  # overflowed far above any limit: unstable
+    if bad.any():
+        out = _critical(np.where(bad[:, None, None], 0.0, phi), branches)
+        for x in out:
+            x[bad] = np.inf
+        return out
     if phi.shape[-1] < ARNOLDI_MIN:
         ev = np.linalg.eigvals(phi)
         rho, mu = _largest(ev)
@@ -511,7 +521,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float,
     most REL_SPACING_DENSE apart)."""
     tau_lo, tau_hi = 60.0 / (rpm_hi * teeth), 60.0 / (rpm_lo * teeth)
     taus = [tau_lo]
-    dense = [False]
+    dense = [bool(_is_dense(tau_lo, f_max))]
     while taus[-1] < tau_hi:
         t = taus[-1]
         lobe = 1.0 / (SAMPLES_PER_LOBE * f_max)
@@ -520,7 +530,7 @@ def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float,
         if is_dense:
             step = max(step, min(REL_SPACING_DENSE * t, 1.0 / (DENSE_PER_LOBE * f_dom)) if f_dom else REL_SPACING_DENSE * t)
         taus.append(min(t + step, tau_hi))
-        dense.append(is_dense)
+        dense.append(_is_dense(taus[-1], f_max))
     taus = np.array(taus)
     return 60.0 / (teeth * taus[::-1]), np.array(dense[::-1])
 
@@ -639,7 +649,7 @@ def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
 
 
 def _worth_processes(modes_x, modes_y, speeds, cut, workers, budget) -> bool:
-    """Whether the batches of speeds go to ``workers`` forked processes: only from the main
+    """Whether the speeds go to ``workers`` forked processes (:func:`_sdm_parts`): only from the main
     thread (a fork from a thread of the app could copy a lock another thread holds) of a
     process that may have children, and only when the work pays for their start (~0.1 s)."""
     import multiprocessing
@@ -692,9 +702,6 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
         slow = samples[~ok]
         warnings.append(f"below {slow.max():.0f} rpm the cut spans too many vibration periods for the "
                         f"semi-discretization's history ({MAX_NODES} nodes); the zero-order lobes are used there")
-    a_s = np.full(samples.size, np.inf)
-    flip_s = np.zeros(samples.size, bool)
-    chat_s = np.full(samples.size, np.nan)
     if guide is not None:
         start = np.asarray(guide(samples), dtype=float)
     else:
@@ -705,9 +712,10 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     run = (cols, geom, teeth, ktc, krc, f_res, depth_cap)
     # Every COARSE-th speed from the guide, the others from their neighbours' limits (a
     # tight first bracket: about half the evaluations).
-    coarse = np.zeros(samples.size, bool)
-    coarse[::COARSE] = True
-    coarse[-1] = True
+    # (counted from the fastest speed: a range computed in parts picks the same ones)
+    pos = samples.size - 1 - np.arange(samples.size)
+    coarse = pos % COARSE == 0
+    coarse[0] = True
     a_s = np.full(samples.size, np.inf)
     flip_s = np.zeros(samples.size, bool)
     chat_s = np.full(samples.size, np.nan)
@@ -722,7 +730,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     stride = COARSE
     while stride > 1 and rest.any():
         stride //= 2
-        now = rest & (np.arange(samples.size) % stride == 0)
+        now = rest & (pos % stride == 0)
         if not now.any():
             continue
         warm = known.sum() >= 2
@@ -740,11 +748,11 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     # down by halving (the grid between takes the lower side, _on_grid). Where the lobes are
     # denser than the window (the lowest in it is reported) a lobe's bottom can fall between
     # samples 1 % apart: each local minimum gets DENSE_ROUNDS rounds of samples beside it.
-    rounds = ["extrema"] * REFINE_ROUNDS + ["jumps"] * JUMP_ROUNDS + ["dense"] * DENSE_ROUNDS
+    rounds = (["extrema"] * REFINE_ROUNDS + ["jumps"] * JUMP_ROUNDS + ["dips", "extrema"]
+              + ["dense"] * DENSE_ROUNDS)
     for kind in rounds:
         fin = np.where(np.isfinite(a_s), a_s, np.inf)
         inner = np.arange(1, samples.size - 1)
-        guess = None
         if kind == "extrema":
             ext = inner[((fin[inner] < fin[inner - 1]) & (fin[inner] <= fin[inner + 1]))
                         | ((fin[inner] > fin[inner - 1]) & (fin[inner] >= fin[inner + 1]) & np.isfinite(fin[inner]))]
@@ -754,6 +762,12 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             jump = np.flatnonzero(_jumps(samples, fin) & ok[:-1] & ok[1:] & ~dense[:-1] & ~dense[1:]
                                   & (samples[1:] / samples[:-1] - 1 > JUMP_WIDTH))
             new = 0.5 * (samples[jump] + samples[jump + 1])
+        elif kind == "dips":  # a narrow dip between two samples that both sit above it
+            gap = np.flatnonzero(ok[:-1] & ok[1:] & ~dense[:-1] & ~dense[1:] & np.isfinite(fin[:-1])
+                                 & np.isfinite(fin[1:]))
+            mid = 0.5 * (samples[gap] + samples[gap + 1])
+            deep = DIP_RATIO * np.minimum(fin[gap], fin[gap + 1])
+            new = mid[_growth(run, 60.0 / (teeth * mid), deep) >= 1.0] if gap.size else mid
         else:
             low = inner[dense[inner] & ok[inner] & (fin[inner] <= fin[inner - 1]) & (fin[inner] <= fin[inner + 1])
                         & np.isfinite(fin[inner])]
@@ -796,19 +810,14 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
 
 
 def _vertex(x0, x1, x2, y0, y1, y2):
-    """Vertex (x, y) of the parabola through three points per column, x kept inside (x0, x2)
-    (the middle of the wider side where the parabola has no minimum there)."""
+    """x of the vertex of the parabola through three points per column, kept inside (x0, x2)
+    (the middle of the wider side where the parabola has no vertex there)."""
     with np.errstate(all="ignore"):
         den = (x0 - x1) * (y1 - y2) - (x1 - x2) * (y0 - y1)
         x = x1 - 0.5 * ((x0 - x1) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y0 - y1)) / den
         lo, hi = np.minimum(x0, x2), np.maximum(x0, x2)
         fallback = 0.5 * (x1 + np.where(np.abs(x1 - x0) > np.abs(x2 - x1), x0, x2))
-        x = np.where(np.isfinite(x) & (x > lo) & (x < hi) & (den != 0), x, fallback)
-        # the parabola's value there (Lagrange form), no higher than the middle point
-        y = (y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2)) + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
-             + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
-        y = np.where(np.isfinite(y), np.clip(y, 0.5 * y1, y1), y1)
-    return x, y
+        return np.where(np.isfinite(x) & (x > lo) & (x < hi) & (den != 0), x, fallback)
 
 
 def _jumps(samples, fin) -> np.ndarray:
@@ -870,24 +879,47 @@ def _islands(run, tau, a_s, flip_s, chat_s, guide_a, ok) -> None:
     """Where lobes overlap, depth can chatter in an island below a stable band, and a search
     started from a neighbour's limit brackets only the crossing nearest to it. Limits above
     ISLAND_RATIO × the guide (the lower of the zero-order limit and the neighbouring samples'
-    limits) are checked at ISLAND_LEVELS × the guide and on up to the limit in steps of
-    ISLAND_STEP; where one chatters, the limit is searched again downward from the lowest (in place)."""
+    limits; a speed stable up to the depth cap counts as limited there) are checked at
+    ISLAND_LEVELS × the guide and on up to the limit in steps of ISLAND_STEP, more finely where
+    |μ| on that ladder comes near 1. Where one chatters, the limit is searched again downward
+    from the lowest (in place)."""
+    depth_cap = run[6]
     g = np.where(np.isfinite(guide_a) & (guide_a > 0), guide_a, np.nan)
-    check = np.flatnonzero(ok & np.isfinite(a_s) & np.isfinite(g) & (a_s > ISLAND_RATIO * g))
+    top = np.where(np.isfinite(a_s), a_s, depth_cap)
+    check = np.flatnonzero(ok & np.isfinite(top) & np.isfinite(g) & (top > ISLAND_RATIO * g))
     if check.size == 0:
         return
-    rungs = np.ceil(np.log(a_s[check] / (ISLAND_LEVELS[-1] * g[check])) / np.log(ISLAND_STEP)).astype(int) - 1
+    rungs = np.ceil(np.log(top[check] / (ISLAND_LEVELS[-1] * g[check])) / np.log(ISLAND_STEP)).astype(int) - 1
     levels = np.concatenate([ISLAND_LEVELS, ISLAND_LEVELS[-1] * ISLAND_STEP ** np.arange(1, max(rungs.max(), 0) + 1)])
-    use = np.arange(levels.size)[None, :] < (len(ISLAND_LEVELS) + np.maximum(rungs, 0))[:, None]  # (check, levels)
+    count = len(ISLAND_LEVELS) + np.maximum(rungs, 0)
+    use = np.arange(levels.size)[None, :] < count[:, None]  # (check, levels)
     row, col = np.nonzero(use)
-    rho = _growth(run, tau[check[row]], g[check[row]] * levels[col])
-    unstable = np.zeros(use.shape, bool)
-    unstable[row, col] = rho >= 1.0
-    redo = unstable.any(axis=1)
+    rho = np.full(use.shape, np.nan)
+    rho[row, col] = _growth(run, tau[check[row]], g[check[row]] * levels[col])
+    lowest = np.where((rho >= 1.0).any(axis=1), levels[np.argmax(rho >= 1.0, axis=1)] * g[check], np.nan)
+    # Where |μ| on the ladder comes within HUMP_NEAR of 1, a narrow band may lie between two
+    # rungs: their geometric middles are tried, ISLAND_HALVINGS times (25 % → 6 % steps there).
+    pts = [list(zip(g[check[i]] * levels[use[i]], rho[i, use[i]])) for i in range(check.size)]
+    for _ in range(ISLAND_HALVINGS):
+        rows, mids = [], []
+        for i in np.flatnonzero(np.isnan(lowest)):
+            p = sorted(pts[i])
+            for (d0, r0), (d1, r1) in zip(p[:-1], p[1:]):
+                if max(r0, r1) >= 1 - HUMP_NEAR:
+                    rows.append(i)
+                    mids.append(np.sqrt(d0 * d1))
+        if not rows:
+            break
+        rows, mids = np.array(rows), np.array(mids)
+        r_mid = _growth(run, tau[check[rows]], mids)
+        for i, d, r in zip(rows, mids, r_mid):
+            pts[i].append((d, r))
+            if r >= 1.0:
+                lowest[i] = np.fmin(lowest[i], d)
+    redo = np.isfinite(lowest)
     if redo.any():
         idx = check[redo]
-        lowest = levels[np.argmax(unstable[redo], axis=1)] * g[idx]
-        a_s[idx], flip_s[idx], chat_s[idx] = _limits(run, tau[idx], lowest, np.ones(idx.size, bool), warm=True)
+        a_s[idx], flip_s[idx], chat_s[idx] = _limits(run, tau[idx], lowest[redo], np.ones(idx.size, bool), warm=True)
 
 
 def _batches(run, tau, idx):
@@ -932,8 +964,10 @@ def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
     cplx = np.full(b, np.nan)
     # Warm: the first two trials straddle the guess by one final bracket's width.
     grow = np.full(b, 1 + 0.98 * DEPTH_RTOL if warm else 2.0)
+    # (a warm start stays where it is under the cap: from half the cap the growing steps
+    # could jump over a band between there and the start)
     trial = np.minimum((1 - 0.49 * DEPTH_RTOL if warm else 0.7) * start,
-                       0.5 * depth_cap if np.isfinite(depth_cap) else np.inf)
+                       (1 - DEPTH_RTOL if warm else 0.5) * depth_cap if np.isfinite(depth_cap) else np.inf)
     done = np.zeros(b, bool)
     side = np.zeros(b, int)  # Illinois: which end was kept last time
     for _ in range(60):
@@ -1068,7 +1102,7 @@ def _hump_top(steps: _Steps, plan: _Plan, xs, vs, flip) -> np.ndarray:
     out = np.full(xs.shape[1], np.nan)
     act = np.arange(xs.shape[1])
     for _ in range(HUMP_ROUNDS):
-        x, _ = _vertex(*xs, *vs)
+        x = _vertex(*xs, *vs)
         rho, _, ng, cx = _critical(_monodromy(steps.take(act), np.exp(x), plan), branches=True)
         y = np.where(flip[act], cx, ng)
         hit = rho >= 1.0
@@ -1100,7 +1134,7 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
     order = np.argsort(speeds)
     grid = speeds[order]
     if samples.size == 1:
-        a = np.full(grid.size, a_s[0])
+        a = np.full(grid.size, a_s[0] if ok[0] else np.nan)
         fl = np.full(grid.size, flip_s[0])
         ch = np.full(grid.size, chat_s[0])
     else:
@@ -1137,6 +1171,7 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
             # On a steep flank the lowest lies at the window's edge, between samples.
             edges = np.minimum(line(grid * (1 - DENSE_WINDOW)), line(grid * (1 + DENSE_WINDOW)))
             in_dense = dense[near]
+            lo_w = np.minimum(lo_w, samples.size - 1)
             for i in np.flatnonzero(in_dense):  # the lowest in the window, with its kind and frequency
                 j = lo_w[i] + int(np.argmin(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)]))
                 a[i], fl[i] = min(a_s[j], edges[i]), flip_s[j]

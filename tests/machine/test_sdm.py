@@ -211,3 +211,30 @@ def test_where_lobes_are_denser_than_the_window_its_lowest_limit_is_found():
     a = lobes.a_lim[grid == 1010.0][0]
     rho, _ = sdm_growth(TOOL3_X, TOOL3_Y, rpm=1018.5, depth=np.array([a / 1.01, a / 0.97]), **TOOL3_CUT)
     assert rho[0] < 1.0 <= rho[1], f"{a / MM:.3f} mm reported; |mu| at 1,018.5 rpm: {rho}"
+
+
+def test_a_weak_band_under_the_flute_length_is_found_too():
+    """With the flute length as the depth cap a speed stable up to the cap was never checked
+    for a weak band below it, and a search restarted from such a band began at half the cap
+    and stepped over it: 12,750 rpm read 'stable to the 20 mm cap' where 13.9-15.5 mm chatters."""
+    from taptune.machine.lobes import zoa_lobes
+
+    f = np.arange(100.0, 9000.0, 2.0)
+    speeds = np.arange(5000.0, 25000.0 + 1, 250.0)
+    zoa = zoa_lobes(f, TOOL3_X.frf(f), TOOL3_Y.frf(f), rpm=speeds, **TOOL3_CUT)
+    guide = lambda r: np.interp(r, zoa.rpm, np.where(np.isfinite(zoa.a_lim), zoa.a_lim, zoa.a_crit))  # noqa: E731
+    lobes = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=speeds, guide=guide, depth_cap=20 * MM, **TOOL3_CUT)
+    a = lobes.a_lim[speeds == 12750.0][0]
+    rho, _ = sdm_growth(TOOL3_X, TOOL3_Y, rpm=12750.0, depth=np.array([0.98 * a, 14.5 * MM]), **TOOL3_CUT)
+    assert a < 14.2 * MM and rho[0] < 1.0 < rho[1]
+
+
+def test_a_single_speed_left_to_the_zero_order_lobes_is_not_called_stable():
+    """Alone on the grid, a speed below the history's reach read inf (stable at any depth)
+    beside the warning that the zero-order lobes stand in there; it is NaN (not computed)."""
+    lobes = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=np.array([300.0]), **TOOL3_CUT)
+    assert np.isnan(lobes.a_lim[0]) and "zero-order" in lobes.warnings[0]
+    f = np.arange(100.0, 9000.0, 2.0)
+    full = stability_lobes(f, TOOL3_X.frf(f), TOOL3_Y.frf(f), rpm=np.array([300.0]), method="sdm",
+                           modes=(TOOL3_X, TOOL3_Y), **TOOL3_CUT)
+    assert np.isfinite(full.a_lim[0])  # the zero-order limit, with the warning
