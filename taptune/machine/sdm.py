@@ -273,19 +273,34 @@ def _plan(p: int, steps_between) -> _Plan:
     return _Plan(nodes, edges, np.array(node_step), _lagrange(nodes, mid))
 
 
+def _peak(cols) -> np.ndarray:
+    """Peak compliance 1/(2ζk) of each mode [m/N]."""
+    _, _, z, k = cols
+    return 1.0 / (2 * z * k)
+
+
 def _f_resolve(cols) -> float:
     """The frequency the steps and history nodes resolve [Hz]: the fastest mode whose peak
     compliance 1/(2ζk) is at least ``RESOLVE_SHARE`` of the most compliant one's (a faster,
     stiffer mode still moves exactly between kicks; it only sees coarser kicks)."""
-    _, wn, z, k = cols
-    peak = 1.0 / (2 * z * k)
-    return float(wn[peak >= RESOLVE_SHARE * peak.max()].max() / (2 * np.pi))
+    peak = _peak(cols)
+    return float(cols[1][peak >= RESOLVE_SHARE * peak.max()].max() / (2 * np.pi))
+
+
+def _f_dominant(cols) -> float:
+    """The frequency [Hz] of the most compliant mode: its lobes are the lowest."""
+    return float(cols[1][np.argmax(_peak(cols))] / (2 * np.pi))
+
+
+def _nodes(periods):
+    """History nodes (p) for an active part spanning ``periods`` periods of the resolved mode."""
+    return np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
 
 
 def _resolution(active_s, f_max: float, steps_per_mode: float | None, nodes: int | None):
     """(p, steps between successive nodes) for an active part of ``active_s`` seconds."""
     periods = active_s * f_max
-    p = int(nodes) if nodes else int(np.clip(np.ceil(MIN_NODES + NODES_PER_PERIOD * periods), MIN_NODES, 10**6))
+    p = int(nodes) if nodes else int(np.clip(_nodes(periods), MIN_NODES, 10**6))
     frac = np.diff(0.5 * (1 - np.cos(np.pi * np.arange(p + 1) / p)))
     per_mode = STEPS_PER_MODE if steps_per_mode is None else steps_per_mode
     return p, np.maximum(2, np.ceil(frac * periods * per_mode)).astype(int)
@@ -508,12 +523,6 @@ def _is_dense(tau, f_max: float):
     return 1.0 / (f_max * tau) < 2 * DENSE_WINDOW
 
 
-def _f_dominant(cols) -> float:
-    """The frequency [Hz] of the most compliant mode (peak 1/(2ζk)): its lobes are the lowest."""
-    _, wn, z, k = cols
-    return float(wn[np.argmax(1.0 / (2 * z * k))] / (2 * np.pi))
-
-
 def _sample_speeds(rpm_lo: float, rpm_hi: float, teeth: int, f_max: float,
                    f_dom: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """SDM speeds (ascending) and whether each lies where the lobes are too dense to resolve
@@ -573,9 +582,11 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
         raise InputError("K_tc must be > 0 and K_rc >= 0")
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
     budget = np.inf if budget is None else float(budget)
-    if not _worth_processes(modes_x, modes_y, speeds, cut, workers, budget):
-        return _on_grid(speeds, *_sdm_samples(modes_x, modes_y, rpm=speeds, guide=guide, budget=budget, **cut))
-    return _on_grid(speeds, *_sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers))
+    if _can_fork(workers, speeds):
+        samples, work = _budgeted_work(modes_x, modes_y, speeds, cut, budget)
+        if work.sum() >= PARALLEL_WORK:  # the work pays for the processes' start (~0.1 s)
+            return _on_grid(speeds, *_sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, work))
+    return _on_grid(speeds, *_sdm_samples(modes_x, modes_y, rpm=speeds, guide=guide, budget=budget, **cut))
 
 
 #: The speed ranges of :func:`_sdm_parts` overlap by this much (relative) on either side of a seam,
@@ -585,9 +596,10 @@ SPLIT_FIXED = 6000.0
 _PARTS = None  # what forked part processes compute (inherited, not pickled: the guide is any callable)
 
 
-def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers):
+def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, work):
     """:func:`_sdm_samples` in ``workers`` forked processes, each on a speed range of equal
-    work (:func:`_cost`, within ``budget`` from the fastest down) and overlapping its
+    time (the whole range's ``samples`` and their ``work`` within ``budget``, from
+    :func:`_budgeted_work`) and overlapping its
     neighbours by SEAM_OVERLAP; each side of a seam keeps its own samples. One fork and no
     exchange between the parts: the phases of one range (neighbours guess each other's
     limits, islands, jumps, lobe bottoms) run without waiting for the others."""
@@ -597,13 +609,9 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers):
     global _PARTS
     lo, hi = float(speeds.min()), float(speeds.max())
     cols = _modal(modes_x, modes_y)
-    samples, _ = _sample_speeds(lo, hi, cut["teeth"], cols[1].max() / (2 * np.pi), _f_dominant(cols))
-    work = _cost(modes_x, modes_y, samples, cut)
-    work = np.where(np.cumsum(work[::-1])[::-1] <= budget, work, 0.0)  # what the budget leaves to the ZOA
     # Time per sample ≈ a fixed part (the search's Python, small arrays) + ∝ the map's size²
     # (measured: 0.2 ms an evaluation at n = 38, 2.9 ms at n = 246).
-    geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
-    p = np.ceil(MIN_NODES + NODES_PER_PERIOD * geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols))
+    p = _nodes(_periods(cols, samples, cut))
     cum = np.cumsum(np.where(work > 0, (2 * len(cols[1]) + 2 * (p + 1)) ** 2 + SPLIT_FIXED, 0.0))
     seams = [float(samples[min(np.searchsorted(cum, cum[-1] * k / workers), samples.size - 1)]) for k in range(1, workers)]
     edges = [lo] + seams + [hi]
@@ -639,34 +647,44 @@ def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
     """Relative work per sampled speed: steps × modal rows × matrix size, plus the multiplier's
     (0 where the ZOA takes over)."""
     cols = _modal(modes_x, modes_y)
-    geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
-    periods = geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols)
-    p = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
+    periods = _periods(cols, samples, cut)
+    p = _nodes(periods)
     n = 2 * len(cols[1]) + 2 * (p + 1)
     steps = np.maximum(2 * p, STEPS_PER_MODE * periods)
     eig = np.where(n < ARNOLDI_MIN, n ** 3 / 20, ARNOLDI_STEPS * n ** 2 / 4)
     return np.where(p <= MAX_NODES, steps * n * (len(cols[1]) / 6) ** 2 + eig, 0.0)
 
 
-def _worth_processes(modes_x, modes_y, speeds, cut, workers, budget) -> bool:
-    """Whether the speeds go to ``workers`` forked processes (:func:`_sdm_parts`): only from the main
-    thread (a fork from a thread of the app could copy a lock another thread holds) of a
-    process that may have children, and only when the work pays for their start (~0.1 s)."""
+def _periods(cols, samples, cut) -> np.ndarray:
+    """Periods of the resolved mode within one tooth's active part at each speed [rpm]."""
+    geom = _geometry(cut["teeth"], cut["ktc"], cut["krc"], cut["diameter"], cut["ae"], cut["milling"])
+    return geom[2] * 60.0 / (cut["teeth"] * samples) * _f_resolve(cols)
+
+
+def _can_fork(workers: int, speeds) -> bool:
+    """Whether speeds may go to ``workers`` forked processes (:func:`_sdm_parts`): only from the
+    main thread (a fork from a thread of the app could copy a lock another thread holds) of a
+    process that may have children."""
     import multiprocessing
     import threading
 
-    lo, hi = float(speeds.min()), float(speeds.max())
-    if workers < 2 or hi / lo < 1.2 or "fork" not in multiprocessing.get_all_start_methods():
+    if workers < 2 or speeds.max() / speeds.min() < 1.2 or "fork" not in multiprocessing.get_all_start_methods():
         return False
     if threading.current_thread() is not threading.main_thread():
         return False
     # A worker of a pool (taptune batch) is daemonic and may have no children; its pool
     # already keeps the cores busy.
-    if multiprocessing.current_process().daemon:
-        return False
+    return not multiprocessing.current_process().daemon
+
+
+def _budgeted_work(modes_x, modes_y, speeds, cut, budget):
+    """The whole range's sample speeds and their work (:func:`_cost`), 0 where ``budget``
+    (spent from the fastest down) leaves them to the zero-order lobes."""
     cols = _modal(modes_x, modes_y)
-    samples, _ = _sample_speeds(lo, hi, cut["teeth"], cols[1].max() / (2 * np.pi), _f_dominant(cols))
-    return min(float(np.sum(_cost(modes_x, modes_y, samples, cut))), budget) >= PARALLEL_WORK
+    samples, _ = _sample_speeds(float(speeds.min()), float(speeds.max()), cut["teeth"], cols[1].max() / (2 * np.pi),
+                                _f_dominant(cols))
+    work = _cost(modes_x, modes_y, samples, cut)
+    return samples, np.where(np.cumsum(work[::-1])[::-1] <= budget, work, 0.0)
 
 
 def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide,
@@ -688,8 +706,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             dense = np.zeros(samples.size, bool)
     tau = 60.0 / (teeth * samples)
     periods = geom[2] * tau * f_res
-    p_need = np.ceil(MIN_NODES + NODES_PER_PERIOD * periods)
-    ok = p_need <= MAX_NODES
+    ok = _nodes(periods) <= MAX_NODES
     warnings = []
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling)
     work = np.cumsum(_cost(modes_x, modes_y, samples, cut)[::-1])[::-1]  # from the fastest down
@@ -777,7 +794,9 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             continue
         tau_n = 60.0 / (teeth * new)
         at = np.searchsorted(samples, new)
-        near = np.minimum(fin[np.clip(at - 1, 0, None)], fin[np.clip(at, None, samples.size - 1)])
+        left, right = np.clip(at - 1, 0, None), np.clip(at, None, samples.size - 1)
+        low_side = np.where(fin[left] <= fin[right], left, right)  # the lower neighbour
+        near = fin[low_side]
         a_n = np.full(new.size, np.inf)
         f_n = np.zeros(new.size, bool)
         c_n = np.full(new.size, np.nan)
@@ -791,8 +810,6 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             # Only a sample below the lobe's lowest so far can lower a window's lowest: one
             # evaluation there settles the others (their limit is at least that depth).
             calm = _growth(run, tau_n, guess) < 1.0
-            low_side = np.where(fin[np.clip(at - 1, 0, None)] <= fin[np.clip(at, None, samples.size - 1)],
-                                np.clip(at - 1, 0, None), np.clip(at, None, samples.size - 1))
             a_n[calm], f_n[calm], c_n[calm] = guess[calm], flip_s[low_side][calm], chat_s[low_side][calm]
             todo = ~calm
         if todo.any():
@@ -929,7 +946,7 @@ def _batches(run, tau, idx):
     order = idx[np.argsort(periods[idx], kind="stable")]
     out = []
     while order.size:
-        nodes = MIN_NODES + NODES_PER_PERIOD * periods[order]
+        nodes = MIN_NODES + NODES_PER_PERIOD * periods[order]  # (unrounded: the spread between cuts)
         take = max(1, min(int(np.searchsorted(nodes, GROUP_SPREAD * nodes[0], "right")), BATCH))
         chunk, order = order[:take], order[take:]
         out.append((chunk, _plan(*_resolution(geom[2] * tau[chunk].max(), f_max, None, None))))
