@@ -336,8 +336,8 @@ def _steps(cols, geom, teeth, ktc, krc, tau, plan: _Plan) -> _Steps:
     hm = _cutting_matrix(st + omega[:, None] * tmid, teeth, ktc, krc, st, ex)  # (b, s, 2, 2)
     sel = np.zeros((nm, 2))
     sel[np.arange(nm), d] = 1.0
-    gsel = (wn * wn / k)[:, None] * sel  # modal acceleration per newton in x, y
-    kh = np.einsum("mi,bsij->sbmj", gsel, hm) * h.T[..., None, None]
+    # modal acceleration per newton, each mode from the force of its own direction
+    kh = np.moveaxis(hm, 1, 0)[:, :, d, :] * ((wn * wn / k)[:, None] * h.T[..., None, None])
     free = (1 - frac) * tau
     gaps = 0.5 * h
     gaps[:, :-1] += 0.5 * h[:, 1:]
@@ -378,7 +378,7 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     wv = np.zeros((p1 - 1, b, m2, nm))
     wq[:, :, ii, ii] = 1.0
     wv[:, :, nm + ii, ii] = 1.0
-    g = np.empty((b, m2, 2, s))  # step axis last: each interval's steps are one slice
+    g = np.empty((s, b, m2, 2))  # step-major while written (contiguous), turned step-last below
     for t in range(int(length.max())):
         live = np.flatnonzero(length > t)
         if live[-1] - live[0] + 1 == live.size:
@@ -389,7 +389,7 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
             q += v @ akq[i + 1]  # the kick of step i + 1
             f00, f01, f10, f11 = e00[i], e01[i], e10[i], e11[i]  # then free motion back to step i
             wq[live], wv[live] = q * f00 + v * f10, q * f01 + v * f11
-        g[..., i] = np.moveaxis(wv[live] @ src[i], 0, -1)
+        g[i] = wv[live] @ src[i]
     # State after an interval's last kick (the start, for the first) → after the next's last kick.
     wq += wv @ akq[ns[:-1]]
     j = last[:-1]
@@ -400,21 +400,25 @@ def _monodromy(steps: _Steps, depth, plan: _Plan) -> np.ndarray:
     te0, te1 = steps.to_edge
     read = np.concatenate([te0[last][..., 0][..., None, :] * steps.sel_t, te1[last][..., 0][..., None, :] * steps.sel_t],
                           axis=-1)  # (p, b, 2, 2M)
+    # Rows (speed, modal row, direction), steps along: each interval's impulses are one product.
+    g = np.ascontiguousarray(g.reshape(s, b * m2 * 2).T)
     z = np.zeros((b, m2, n))
     z[:, ii, ii] = 1.0
     z[:, nm + ii, nm + ii] = 1.0
     spare = np.empty_like(z)
-    hist = np.zeros((b, 2, p1, n))  # x, y at each node (the history block: direction-major)
+    phi = np.empty((b, n, n))
+    hist = phi[:, m2:].reshape(b, 2, p1, n)  # x, y at each node (the history block: direction-major)
+    hist[:, :, 0] = 0.0
     hist[:, :, 0, :nm] = steps.sel_t
     for c in range(p1 - 1):
         lo, hi = ns[c], ns[c + 1]
         np.matmul(fold[c], z, out=spare)
         z, spare = spare, z
         # Σ_i g_i ⊗ (interpolation row i): the delayed positions' impulses of the interval.
-        z[:, :, m2:] += (g[..., lo:hi] @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
+        z[:, :, m2:] += (g[:, lo:hi] @ plan.interp[lo:hi]).reshape(b, m2, 2 * p1)
         np.matmul(read[c], z, out=hist[:, :, c + 1])
-    q, v = _propagate(tuple(x[-1] for x in steps.between), z[:, :nm], z[:, nm:].copy())
-    return np.concatenate([q, v, hist.reshape(b, 2 * p1, n)], axis=1)
+    phi[:, :nm], phi[:, nm:m2] = _propagate(tuple(x[-1] for x in steps.between), z[:, :nm], z[:, nm:].copy())
+    return phi
 
 
 def _critical(phi, branches: bool = False):
@@ -427,7 +431,7 @@ def _critical(phi, branches: bool = False):
     reaches along the negative real axis (−min Re μ: continuous in depth, also where two real
     multipliers meet and turn into a complex pair) and the largest |μ| that is not real and
     negative (the Hopf branch)."""
-    bad = ~np.all(np.isfinite(phi), axis=(-2, -1))  # overflowed far above any limit: unstable
+    bad = ~np.isfinite(phi.sum(axis=(-2, -1)))  # overflowed far above any limit: unstable
     if bad.any():
         out = _critical(np.where(bad[:, None, None], 0.0, phi), branches)
         for x in out:
@@ -965,7 +969,10 @@ def _growth(run, tau, depth) -> np.ndarray:
 
 
 def _growth_batch(cols, geom, teeth, ktc, krc, tau, depth, plan) -> np.ndarray:
-    return _critical(_monodromy(_steps(cols, geom, teeth, ktc, krc, tau, plan), depth, plan))[0]
+    # (a speed tried at several depths, as on the islands' ladder, needs its steps once)
+    once, where = np.unique(tau, return_inverse=True)
+    steps = _steps(cols, geom, teeth, ktc, krc, once, plan)
+    return _critical(_monodromy(steps if np.array_equal(once, tau) else steps.take(where), depth, plan))[0]
 
 
 def _bracket(steps: _Steps, plan: _Plan, start, depth_cap, warm: bool):
