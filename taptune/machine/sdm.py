@@ -634,8 +634,8 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, w
         _PARTS = None
     keep = [(out[k][0] >= edges[k] if k else out[k][0] > -1) & (out[k][0] < edges[k + 1] if k < workers - 1 else True)
             for k in range(workers)]
-    merged = [np.concatenate([o[i][m] for o, m in zip(out, keep)]) for i in range(6)]
-    warnings = tuple(dict.fromkeys(w for o in out for w in o[6]))
+    merged = [np.concatenate([o[i][m] for o, m in zip(out, keep)]) for i in range(7)]
+    warnings = tuple(dict.fromkeys(w for o in out for w in o[7]))
     return (*merged, warnings)
 
 
@@ -643,7 +643,7 @@ def _sdm_part(k: int):
     modes_x, modes_y, guide, cut, parts = _PARTS
     part, budget = parts[k]
     if part.size == 0:
-        return tuple(np.zeros(0, t) for t in (float, bool, bool, float, bool, float)) + ((),)
+        return tuple(np.zeros(0, t) for t in (float, bool, bool, bool, float, bool, float)) + ((),)
     return _sdm_samples(modes_x, modes_y, rpm=part, guide=guide, budget=budget, **cut)
 
 
@@ -694,13 +694,18 @@ def _budgeted_work(modes_x, modes_y, speeds, cut, budget):
 def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide,
                  budget=np.inf):
     """The sampled limits of :func:`sdm_lobes` (``rpm`` checked): (sample speeds, dense, ok,
-    limits, flip, chatter frequencies, warnings), for :func:`_on_grid`."""
+    shown, limits, flip, chatter frequencies, warnings), for :func:`_on_grid`; ``shown`` is
+    False for the samples below the budget's cut-off that only the window above it needs."""
     speeds = np.asarray(rpm, dtype=float)
     cols = _modal(modes_x, modes_y)
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
     f_res = _f_resolve(cols)
     lo, hi = float(speeds.min()), float(speeds.max())
+    # Where lobes are denser than the window, the lowest within ±DENSE_WINDOW of the grid's end
+    # speeds (or of a speed alone) lies beyond them as often as not: the samples go on past.
+    lo *= (1 - DENSE_WINDOW) if _is_dense(60.0 / (teeth * lo), f_max) else 1.0
+    hi *= (1 + DENSE_WINDOW) if _is_dense(60.0 / (teeth * hi), f_max) else 1.0
     if hi / lo - 1 < 1e-9:
         samples, dense = np.array([lo]), np.array([False])
     else:
@@ -715,10 +720,14 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling)
     work = np.cumsum(_cost(modes_x, modes_y, samples, cut)[::-1])[::-1]  # from the fastest down
     over = ok & (work > budget)
+    cutoff = 0.0  # the speeds shown start here
     if over.any():
         ok &= ~over
         warnings.append(f"below {samples[over].max():.0f} rpm the semi-discretization would take more than a few "
                         "seconds (`--method sdm` computes it); the zero-order lobes are used there")
+        if ok.any():  # the window of the slowest speeds kept reaches below them
+            cutoff = samples[ok].min()
+            ok |= over & dense & (samples >= cutoff * (1 - DENSE_WINDOW))
     elif not ok.all():
         slow = samples[~ok]
         warnings.append(f"below {slow.max():.0f} rpm the cut spans too many vibration periods for the "
@@ -827,7 +836,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
         ok = cat(ok, np.ones(new.size, bool))
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
-    return samples, dense, ok, a_s, flip_s, chat_s, tuple(warnings)
+    return samples, dense, ok, samples >= cutoff, a_s, flip_s, chat_s, tuple(warnings)
 
 
 def _vertex(x0, x1, x2, y0, y1, y2):
@@ -1152,9 +1161,10 @@ def _is_flip(mu) -> np.ndarray:
     return (mu.real < 0) & (np.abs(mu.imag) <= 1e-3 * np.abs(mu))
 
 
-def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLobes:
+def _on_grid(speeds, samples, dense, ok, shown, a_s, flip_s, chat_s, warnings) -> SdmLobes:
     """Sampled limits onto the requested grid: linear in the tooth period; over the dense
-    part the lowest limit within ±DENSE_WINDOW."""
+    part the lowest limit within ±DENSE_WINDOW; NaN below the ``shown`` samples (left to the
+    zero-order lobes)."""
     order = np.argsort(speeds)
     grid = speeds[order]
     if samples.size == 1:
@@ -1200,7 +1210,8 @@ def _on_grid(speeds, samples, dense, ok, a_s, flip_s, chat_s, warnings) -> SdmLo
                 j = lo_w[i] + int(np.argmin(a_s[lo_w[i]: max(hi_w[i], lo_w[i] + 1)]))
                 a[i], fl[i] = min(a_s[j], edges[i]), flip_s[j]
                 ch[i] = chat_s[j] * grid[i] / samples[j] if flip_s[j] else chat_s[j]
-        a = np.where(ok[near] & (grid >= samples[ok].min() if ok.any() else False), a, np.nan)  # left to the ZOA
+        a = np.where(ok[near] & (grid >= samples[ok & shown].min() if (ok & shown).any() else False), a,
+                     np.nan)  # left to the ZOA
     out_a, out_f, out_c = np.empty(grid.size), np.empty(grid.size, bool), np.empty(grid.size)
     out_a[order], out_f[order], out_c[order] = a, fl, ch
     return SdmLobes(rpm=speeds, a_lim=out_a, flip=out_f, chatter_hz=out_c, sample_rpm=samples, sample_a=a_s,

@@ -213,6 +213,33 @@ def test_where_lobes_are_denser_than_the_window_its_lowest_limit_is_found():
     assert rho[0] < 1.0 <= rho[1], f"{a / MM:.3f} mm reported; |mu| at 1,018.5 rpm: {rho}"
 
 
+def test_the_lowest_in_the_window_does_not_depend_on_where_the_grid_or_the_budget_ends():
+    """Where lobes are denser than the window the limit reported is the lowest within ±1.5 %.
+    A speed alone and the ends of a grid had only the samples on their own side of the window:
+    1,010 rpm alone read 5.59 mm where the grid 900-1,150 rpm reads 3.77 mm. The speeds just
+    above where `auto`'s budget hands over to the zero-order lobes keep their whole window too."""
+    from taptune.machine.lobes import zoa_lobes
+    from taptune.machine.sdm import _budgeted_work
+
+    f = np.arange(100.0, 8000.0, 1.0)
+    wide = np.arange(900.0, 1150.0 + 1, 10.0)
+    zoa = zoa_lobes(f, TOOL3_X.frf(f), TOOL3_Y.frf(f), rpm=wide, **TOOL3_CUT)
+    guide = lambda r: np.interp(r, zoa.rpm, np.where(np.isfinite(zoa.a_lim), zoa.a_lim, zoa.a_crit))  # noqa: E731
+    ref = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=wide, guide=guide, **TOOL3_CUT)
+    at = lambda lobes, r: lobes.a_lim[lobes.rpm == r][0]  # noqa: E731
+    for grid in (np.array([1010.0]), np.array([1010.0, 1020.0]), np.arange(1010.0, 1060.0 + 1, 10.0)):
+        part = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=grid, guide=guide, **TOOL3_CUT)
+        assert at(part, 1010.0) <= 1.005 * at(ref, 1010.0), (grid, at(part, 1010.0) / MM, at(ref, 1010.0) / MM)
+    # a budget that stops the semi-discretization at about 1,010 rpm
+    cut = dict(TOOL3_CUT, depth_cap=np.inf)
+    samples, work = _budgeted_work(TOOL3_X, TOOL3_Y, wide, cut, np.inf)
+    budget = float(np.sum(work[samples >= 1008.0]))
+    cheap = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=wide, guide=guide, budget=budget, workers=1, **TOOL3_CUT)
+    kept = np.isfinite(cheap.a_lim)
+    assert 1000.0 <= wide[kept].min() <= 1060.0 and np.isnan(cheap.a_lim[wide < 1000.0]).all()
+    assert np.all(cheap.a_lim[kept] <= 1.005 * ref.a_lim[kept]), cheap.a_lim[kept][:4] / ref.a_lim[kept][:4]
+
+
 def test_a_weak_band_under_the_flute_length_is_found_too():
     """With the flute length as the depth cap a speed stable up to the cap was never checked
     for a weak band below it, and a search restarted from such a band began at half the cap

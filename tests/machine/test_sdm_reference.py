@@ -151,14 +151,23 @@ LOW = [  # many history nodes: 82 (2 teeth, a/D 0.05, 800 rpm) and 60 (4 teeth, 
                          ids=[f"{c[0]}-{c[3]}t-aD{c[4]:g}-{c[5][0]:.0f}" for c in LOW])
 def test_sdm_matches_the_reference_at_low_speed(name, modes, tool, teeth, ratio, speeds):
     """At low speed one tooth's cut spans many vibration periods (18 and 13 of the 3.4 kHz
-    mode): the limit at the speed itself (a grid of these speeds alone is computed point by
-    point) within 0.5 % of the reference (benchmarks/validate_sdm.py --low: 0.02-0.07 %)."""
+    mode): the multipliers at the speed itself cross the unit circle within 0.5 % of the
+    reference's limit, by the same kind (benchmarks/validate_sdm.py --low: 0.02-0.07 %). The
+    lobes there are narrower than the ±1.5 % window, so the limit reported for the speed is the
+    window's lowest: never above the speed's own, and not far below it."""
+    from benchmarks.validate_sdm import taptune_modes
+    from taptune.machine.sdm import _is_flip, sdm_growth
+
     cut = _cut(tool, teeth, ratio, "down")
     speeds = np.array(speeds)
     want = ref.limits(modes, cut, speeds, **RES)
-    a, flip, _, _ = taptune_sdm(modes, cut, speeds)
-    np.testing.assert_array_less(np.abs(a / want.a_lim - 1), 0.005)
-    assert list(flip) == [k == "flip" for k in want.kind]
+    mx, my = taptune_modes(modes)
+    kw = dict(teeth=cut.teeth, ktc=cut.kt, krc=cut.kn, diameter=cut.diameter, ae=cut.ae, milling=cut.milling)
+    for rpm, limit, kind in zip(speeds, want.a_lim, want.kind):
+        rho, mu = sdm_growth(mx, my, rpm=rpm, depth=np.array([0.995, 1.005]) * limit, **kw)
+        assert rho[0] < 1.0 <= rho[1] and bool(_is_flip(mu[1])) == (kind == "flip"), (rpm, rho)
+    a, _, _, _ = taptune_sdm(modes, cut, speeds)
+    assert np.all((a <= 1.005 * want.a_lim) & (a >= 0.9 * want.a_lim)), a / want.a_lim
 
 
 @pytest.mark.slow
