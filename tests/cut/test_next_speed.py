@@ -67,3 +67,22 @@ def test_observations_weigh_the_sets_that_explain_them():
     band = weighted_band(np.array([[1.0], [1.35], [2.5]]), w)
     assert band[:, 0] == pytest.approx([1.0, 1.35, 1.35])
     assert weighted_band(np.array([[1.0], [2.0], [4.0]]), np.full(3, 1 / 3))[:, 0] == pytest.approx([1.0, 2.0, 4.0])
+
+
+def test_one_misheard_verdict_does_not_rule_out_the_truth():
+    # Two sets, limits 1 and 3 mm at the cuts; a clean cut at 2 mm and a chatter at 1.2 mm
+    # contradict each other. As heard (lapse 0) the chatter rules the 3 mm set out, 3,600:1:
+    # Φ(−4.62)·Φ(1.22) = 1.7e-6 against Φ(2.70)·Φ(−6.11) = 5e-10. Each verdict wrong with
+    # probability 0.02 (by hand: (0.02 + 0.96·1.9e-6)(0.02 + 0.96·0.889) = 0.0175 against
+    # (0.02 + 0.96·0.9965)(0.02 + 0.96·5e-10) = 0.0195) both stay in play, and two more
+    # clean cuts at 2 mm settle it for the 3 mm set.
+    from taptune.machine.observed import LAPSE
+
+    limits = np.array([[1.0, 1.0], [3.0, 3.0]]) * MM
+    depths, verdicts = np.array([2.0, 1.2]) * MM, ["stable", "chatter"]
+    assert set_weights(limits, depths, verdicts)[1] < 1e-3
+    w = set_weights(limits, depths, verdicts, lapse=LAPSE)
+    assert LAPSE == 0.02 and w[1] == pytest.approx(0.0195 / (0.0175 + 0.0195), rel=0.02)
+    more = set_weights(np.array([[1.0] * 4, [3.0] * 4]) * MM, np.array([2.0, 2.0, 2.0, 1.2]) * MM,
+                       ["stable", "stable", "stable", "chatter"], lapse=LAPSE)
+    assert more[1] > 0.99
