@@ -587,9 +587,9 @@ def sdm_lobes(modes_x, modes_y, *, teeth: int, ktc: float, krc: float, diameter:
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling, depth_cap=depth_cap)
     budget = np.inf if budget is None else float(budget)
     if _can_fork(workers, speeds):
-        samples, work = _budgeted_work(modes_x, modes_y, speeds, cut, budget)
+        samples, work, cutoff = _budgeted_work(modes_x, modes_y, speeds, cut, budget)
         if work.sum() >= PARALLEL_WORK:  # the work pays for the processes' start (~0.1 s)
-            return _on_grid(speeds, *_sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, work))
+            return _on_grid(speeds, *_sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, work))
     return _on_grid(speeds, *_sdm_samples(modes_x, modes_y, rpm=speeds, guide=guide, budget=budget, **cut))
 
 
@@ -600,9 +600,9 @@ SPLIT_FIXED = 6000.0
 _PARTS = None  # what forked part processes compute (inherited, not pickled: the guide is any callable)
 
 
-def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, work):
+def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, work):
     """:func:`_sdm_samples` in ``workers`` forked processes, each on a speed range of equal
-    time (the whole range's ``samples`` and their ``work`` within ``budget``, from
+    time (the whole range's ``samples``, their ``work`` and the budget's ``cutoff`` speed, from
     :func:`_budgeted_work`) and overlapping its
     neighbours by SEAM_OVERLAP; each side of a seam keeps its own samples. One fork and no
     exchange between the parts: the phases of one range (neighbours guess each other's
@@ -622,10 +622,7 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, w
     parts = []
     for k in range(workers):
         a, b = edges[k] * (1 - SEAM_OVERLAP if k else 1), edges[k + 1] * (1 + SEAM_OVERLAP if k < workers - 1 else 1)
-        part = speeds[(speeds >= a) & (speeds <= b)]
-        # the work of the faster parts comes out of the budget first (it runs from the fastest down)
-        spent = float(np.sum(work[samples > edges[k + 1]]))
-        parts.append((part, budget - spent if np.isfinite(budget) else budget))
+        parts.append((speeds[(speeds >= a) & (speeds <= b)], cutoff))
     _PARTS = (modes_x, modes_y, guide, cut, parts)
     try:
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
@@ -641,10 +638,11 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, budget, cut, workers, samples, w
 
 def _sdm_part(k: int):
     modes_x, modes_y, guide, cut, parts = _PARTS
-    part, budget = parts[k]
+    part, cutoff = parts[k]
     if part.size == 0:
         return tuple(np.zeros(0, t) for t in (float, bool, bool, bool, float, bool, float)) + ((),)
-    return _sdm_samples(modes_x, modes_y, rpm=part, guide=guide, budget=budget, **cut)
+    return _sdm_samples(modes_x, modes_y, rpm=part, guide=guide, cutoff_rpm=cutoff, ends=(k == 0, k == len(parts) - 1),
+                        **cut)
 
 
 def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
@@ -682,17 +680,31 @@ def _can_fork(workers: int, speeds) -> bool:
 
 
 def _budgeted_work(modes_x, modes_y, speeds, cut, budget):
-    """The whole range's sample speeds and their work (:func:`_cost`), 0 where ``budget``
-    (spent from the fastest down) leaves them to the zero-order lobes."""
+    """The whole range's sample speeds, their work (:func:`_cost`), 0 where ``budget`` (spent
+    from the fastest down) leaves them to the zero-order lobes, and the slowest speed the
+    budget keeps (0: it keeps every speed)."""
     cols = _modal(modes_x, modes_y)
-    samples, _ = _sample_speeds(float(speeds.min()), float(speeds.max()), cut["teeth"], cols[1].max() / (2 * np.pi),
-                                _f_dominant(cols))
+    f_max = cols[1].max() / (2 * np.pi)
+    lo, hi = _sampled_range(float(speeds.min()), float(speeds.max()), cut["teeth"], f_max)
+    samples, _ = _sample_speeds(lo, hi, cut["teeth"], f_max, _f_dominant(cols))
     work = _cost(modes_x, modes_y, samples, cut)
-    return samples, np.where(np.cumsum(work[::-1])[::-1] <= budget, work, 0.0)
+    kept = np.where(np.cumsum(work[::-1])[::-1] <= budget, work, 0.0)
+    cut_off = (work > 0) & (kept == 0)
+    return samples, kept, float(samples[kept > 0].min()) if cut_off.any() and (kept > 0).any() else 0.0
+
+
+def _sampled_range(lo: float, hi: float, teeth: int, f_max: float, ends=(True, True)) -> tuple[float, float]:
+    """The speeds [rpm] sampled for the grid ``lo``–``hi``: where lobes are denser than the
+    window, the lowest within ±DENSE_WINDOW of the grid's end speeds (or of a speed alone)
+    lies beyond them as often as not, so the samples go on past (``ends``: which ends are the
+    grid's, not a seam between parts)."""
+    lo *= (1 - DENSE_WINDOW) if ends[0] and _is_dense(60.0 / (teeth * lo), f_max) else 1.0
+    hi *= (1 + DENSE_WINDOW) if ends[1] and _is_dense(60.0 * (1 + DENSE_WINDOW) / (teeth * hi), f_max) else 1.0
+    return lo, hi
 
 
 def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide,
-                 budget=np.inf):
+                 budget=np.inf, cutoff_rpm=0.0, ends=(True, True)):
     """The sampled limits of :func:`sdm_lobes` (``rpm`` checked): (sample speeds, dense, ok,
     shown, limits, flip, chatter frequencies, warnings), for :func:`_on_grid`; ``shown`` is
     False for the samples below the budget's cut-off that only the window above it needs."""
@@ -701,11 +713,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
     f_res = _f_resolve(cols)
-    lo, hi = float(speeds.min()), float(speeds.max())
-    # Where lobes are denser than the window, the lowest within ±DENSE_WINDOW of the grid's end
-    # speeds (or of a speed alone) lies beyond them as often as not: the samples go on past.
-    lo *= (1 - DENSE_WINDOW) if _is_dense(60.0 / (teeth * lo), f_max) else 1.0
-    hi *= (1 + DENSE_WINDOW) if _is_dense(60.0 / (teeth * hi), f_max) else 1.0
+    lo, hi = _sampled_range(float(speeds.min()), float(speeds.max()), teeth, f_max, ends)
     if hi / lo - 1 < 1e-9:
         samples, dense = np.array([lo]), np.array([False])
     else:
@@ -719,15 +727,16 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     warnings = []
     cut = dict(teeth=teeth, ktc=ktc, krc=krc, diameter=diameter, ae=ae, milling=milling)
     work = np.cumsum(_cost(modes_x, modes_y, samples, cut)[::-1])[::-1]  # from the fastest down
-    over = ok & (work > budget)
+    # (a part of a range computed in parts takes the whole range's cut-off speed)
+    over = ok & ((work > budget) | (samples < cutoff_rpm))
     cutoff = 0.0  # the speeds shown start here
     if over.any():
         ok &= ~over
-        warnings.append(f"below {samples[over].max():.0f} rpm the semi-discretization would take more than a few "
-                        "seconds (`--method sdm` computes it); the zero-order lobes are used there")
         if ok.any():  # the window of the slowest speeds kept reaches below them
-            cutoff = samples[ok].min()
+            cutoff = cutoff_rpm or samples[ok].min()
             ok |= over & dense & (samples >= cutoff * (1 - DENSE_WINDOW))
+        warnings.append(f"below {cutoff_rpm or cutoff or samples[over].max():.0f} rpm the semi-discretization would "
+                        "take more than a few seconds (`--method sdm` computes it); the zero-order lobes are used there")
     elif not ok.all():
         slow = samples[~ok]
         warnings.append(f"below {slow.max():.0f} rpm the cut spans too many vibration periods for the "

@@ -216,8 +216,10 @@ def test_where_lobes_are_denser_than_the_window_its_lowest_limit_is_found():
 def test_the_lowest_in_the_window_does_not_depend_on_where_the_grid_or_the_budget_ends():
     """Where lobes are denser than the window the limit reported is the lowest within ±1.5 %.
     A speed alone and the ends of a grid had only the samples on their own side of the window:
-    1,010 rpm alone read 5.59 mm where the grid 900-1,150 rpm reads 3.77 mm. The speeds just
-    above where `auto`'s budget hands over to the zero-order lobes keep their whole window too."""
+    1,010 rpm alone read 5.59 mm where the grid 900-1,150 rpm reads 3.77 mm; a grid ending at
+    2,750 rpm, just above where the lobes get that dense, read 4.02 mm at 2,740 rpm where
+    2,769.6 rpm chatters from 3.70 mm. The speeds just above where `auto`'s budget hands over
+    to the zero-order lobes keep their whole window too, computed in one process or two."""
     from taptune.machine.lobes import zoa_lobes
     from taptune.machine.sdm import _budgeted_work
 
@@ -232,12 +234,20 @@ def test_the_lowest_in_the_window_does_not_depend_on_where_the_grid_or_the_budge
         assert at(part, 1010.0) <= 1.005 * at(ref, 1010.0), (grid, at(part, 1010.0) / MM, at(ref, 1010.0) / MM)
     # a budget that stops the semi-discretization at about 1,010 rpm
     cut = dict(TOOL3_CUT, depth_cap=np.inf)
-    samples, work = _budgeted_work(TOOL3_X, TOOL3_Y, wide, cut, np.inf)
+    samples, work, _ = _budgeted_work(TOOL3_X, TOOL3_Y, wide, cut, np.inf)
     budget = float(np.sum(work[samples >= 1008.0]))
     cheap = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=wide, guide=guide, budget=budget, workers=1, **TOOL3_CUT)
     kept = np.isfinite(cheap.a_lim)
     assert 1000.0 <= wide[kept].min() <= 1060.0 and np.isnan(cheap.a_lim[wide < 1000.0]).all()
     assert np.all(cheap.a_lim[kept] <= 1.005 * ref.a_lim[kept]), cheap.a_lim[kept][:4] / ref.a_lim[kept][:4]
+    two = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=wide, guide=guide, budget=budget, workers=2, **TOOL3_CUT)
+    assert np.array_equal(np.isfinite(two.a_lim), kept) and len(two.warnings) == 1, two.warnings
+    # the grid's upper end, just above where the lobes become denser than the window
+    wide = np.arange(2500.0, 3000.0 + 1, 10.0)
+    ref = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=wide, guide=guide, **TOOL3_CUT)
+    for grid in (np.array([2740.0]), np.array([2740.0, 2750.0]), np.arange(2600.0, 2750.0 + 1, 10.0)):
+        part = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=grid, guide=guide, **TOOL3_CUT)
+        assert at(part, 2740.0) <= 1.005 * at(ref, 2740.0), (grid, at(part, 2740.0) / MM, at(ref, 2740.0) / MM)
 
 
 def test_a_weak_band_under_the_flute_length_is_found_too():

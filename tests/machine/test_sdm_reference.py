@@ -167,7 +167,7 @@ def test_sdm_matches_the_reference_at_low_speed(name, modes, tool, teeth, ratio,
         rho, mu = sdm_growth(mx, my, rpm=rpm, depth=np.array([0.995, 1.005]) * limit, **kw)
         assert rho[0] < 1.0 <= rho[1] and bool(_is_flip(mu[1])) == (kind == "flip"), (rpm, rho)
     a, _, _, _ = taptune_sdm(modes, cut, speeds)
-    assert np.all((a <= 1.005 * want.a_lim) & (a >= 0.9 * want.a_lim)), a / want.a_lim
+    assert np.all((a <= 1.005 * want.a_lim) & (a >= 0.97 * want.a_lim)), a / want.a_lim  # (0.987, 1.000)
 
 
 @pytest.mark.slow
