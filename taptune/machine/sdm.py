@@ -52,7 +52,8 @@ crossing), and there the search walks down from the limit in steps of CHECK_RATI
 that branch stays near the circle or |μ| grows downward; a branch that rises and falls
 again along the walk is searched for its top (parabola in log depth). Large jobs are
 split into speed ranges of about equal time run in forked processes (``workers``, from the
-main thread only; the ranges overlap by ``SEAM_OVERLAP`` and each keeps its side of a seam).
+main thread only; the ranges overlap by ``SEAM_OVERLAP``, each keeps its side of a seam and its
+computed samples across it).
 SDM speeds are sampled uniformly in the tooth period (``SAMPLES_PER_LOBE`` per lobe of the
 fastest mode), between ``REL_SPACING_MIN`` and ``REL_SPACING_MAX`` apart in relative speed
 (flip lobes are narrow), searched coarse first then midpoints (each from its neighbours'
@@ -604,7 +605,8 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
     """:func:`_sdm_samples` in ``workers`` forked processes, each on a speed range of equal
     time (the whole range's ``samples``, their ``work`` and the budget's ``cutoff`` speed, from
     :func:`_budgeted_work`) and overlapping its
-    neighbours by SEAM_OVERLAP; each side of a seam keeps its own samples. One fork and no
+    neighbours by SEAM_OVERLAP; each side of a seam keeps its own samples, and the samples each
+    computed across it. One fork and no
     exchange between the parts: the phases of one range (neighbours guess each other's
     limits, islands, jumps, lobe bottoms) run without waiting for the others."""
     import multiprocessing
@@ -629,9 +631,14 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
             out = list(pool.map(_sdm_part, range(workers)))
     finally:
         _PARTS = None
-    keep = [(out[k][0] >= edges[k] if k else out[k][0] > -1) & (out[k][0] < edges[k + 1] if k < workers - 1 else True)
-            for k in range(workers)]
+    # Each part's own side of the seams, and its computed samples across them (a lobe's narrow
+    # bottom just across a seam, found by one part's refinement, is kept).
+    keep = [((out[k][0] >= edges[k] if k else out[k][0] > -1) & (out[k][0] < edges[k + 1] if k < workers - 1 else True))
+            | (out[k][2] & out[k][3]) for k in range(workers)]
     merged = [np.concatenate([o[i][m] for o, m in zip(out, keep)]) for i in range(7)]
+    order = np.lexsort((merged[4], merged[0]))  # by speed; a speed both computed: the lower limit
+    first = np.concatenate([[True], np.diff(merged[0][order]) > 0])
+    merged = [x[order][first] for x in merged]
     warnings = tuple(dict.fromkeys(w for o in out for w in o[7]))
     return (*merged, warnings)
 
