@@ -64,7 +64,8 @@ window a machinist can hold (``DENSE_WINDOW``), they are sampled no closer than
 ``REL_SPACING_DENSE``, each local minimum gets ``DENSE_ROUNDS`` rounds of samples beside it
 (a lobe's bottom is narrower than that spacing), and the limit reported is the lowest over
 that window; there a sample that is stable at the highest limit computed nearby (or at the
-local minimum's depth) cannot lower that lowest and is settled by that one evaluation.
+local minimum's depth) cannot lower that lowest and is settled by that one evaluation,
+unless it could hold a window's lowest itself (then it is searched: ``TIGHTEN_ROUNDS``).
 ``budget`` bounds the work (:func:`_cost`) from the fastest speed down (``AUTO_BUDGET`` for
 ``method="auto"``); slower speeds are left to the zero-order lobes with a warning naming
 the speed.
@@ -122,6 +123,9 @@ DENSE_ROUNDS = 2
 #: … where the samples are at most REL_SPACING_DENSE apart and at least this many per lobe of
 #: the most compliant mode (whose lobes are the lowest).
 DENSE_PER_LOBE = 2
+#: Rounds (after the dense rounds) in which the samples settled from below that could hold a
+#: window's lowest are searched (:func:`_window_setters`).
+TIGHTEN_ROUNDS = 3
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
 #: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
@@ -770,6 +774,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     known = coarse & ok & np.isfinite(a_s)
     screened, below = _screen_dense(run, samples, tau, dense & rest & ok, known, a_s, flip_s, chat_s)
     rest &= ~screened
+    settled = screened.copy()  # limits known only from below (stable there)
     # The others level by level, each from the nearest limits known (the midpoints first): a
     # neighbour twice as close guesses about four times better, and a close guess is bracketed
     # in two evaluations.
@@ -794,8 +799,13 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     # down by halving (the grid between takes the lower side, _on_grid). Where the lobes are
     # denser than the window (the lowest in it is reported) a lobe's bottom can fall between
     # samples 1 % apart: each local minimum gets DENSE_ROUNDS rounds of samples beside it.
-    rounds = (["extrema"] * REFINE_ROUNDS + ["jumps"] * JUMP_ROUNDS + ["dips", "extrema"]
-              + ["dense"] * DENSE_ROUNDS)
+    # A sample settled from below (its limit known to be at least that) that gives a window its
+    # lowest makes the window read shallower than it is (up to 30 % on a lobe's flank where
+    # lobes just got denser than the window), and a run of them looks like a lobe's bottom to
+    # the dense rounds: those are searched before the dense rounds, and TIGHTEN_ROUNDS times after.
+    rounds = (["extrema"] * REFINE_ROUNDS + ["jumps"] * JUMP_ROUNDS + ["dips", "extrema", "tighten"]
+              + ["dense"] * DENSE_ROUNDS + ["tighten"] * TIGHTEN_ROUNDS)
+    grid = speeds[_is_dense(60.0 / (teeth * speeds), f_max)]
     for kind in rounds:
         fin = np.where(np.isfinite(a_s), a_s, np.inf)
         inner = np.arange(1, samples.size - 1)
@@ -814,10 +824,23 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             mid = 0.5 * (samples[gap] + samples[gap + 1])
             deep = DIP_RATIO * np.minimum(fin[gap], fin[gap + 1])
             new = mid[_growth(run, 60.0 / (teeth * mid), deep) >= 1.0] if gap.size else mid
-        else:
+        elif kind == "dense":
             low = inner[dense[inner] & ok[inner] & (fin[inner] <= fin[inner - 1]) & (fin[inner] <= fin[inner + 1])
                         & np.isfinite(fin[inner])]
             new = np.concatenate([0.5 * (samples[low - 1] + samples[low]), 0.5 * (samples[low] + samples[low + 1])])
+        else:
+            redo = _window_setters(samples, a_s, ok, settled, grid) if grid.size else np.zeros(0, int)
+            new = np.zeros(0)
+            if redo.size:
+                known = ok & ~settled & np.isfinite(a_s)
+                guess = a_s[redo]
+                if known.sum() >= 2:  # (at least its lower bound)
+                    guess = np.fmax(guess, np.interp(tau[redo], tau[known][::-1], a_s[known][::-1]))
+                sub = _limits(run, tau[redo], guess, np.ones(redo.size, bool), warm=True)
+                _islands(run, tau[redo], *sub, np.minimum(guide_at(samples[redo]), a_s[redo]), np.ones(redo.size, bool))
+                a_s[redo], flip_s[redo], chat_s[redo] = sub
+                settled[redo] = False
+            fin = np.where(np.isfinite(a_s), a_s, np.inf)
         new = np.setdiff1d(new, samples)
         if new.size == 0:
             continue
@@ -840,7 +863,9 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             # evaluation there settles the others (their limit is at least that depth).
             calm = _growth(run, tau_n, guess) < 1.0
             a_n[calm], f_n[calm], c_n[calm] = guess[calm], flip_s[low_side][calm], chat_s[low_side][calm]
-            todo = ~calm
+            settled_n, todo = calm, ~calm
+        else:
+            settled_n = np.zeros(new.size, bool)
         if todo.any():
             sub = _limits(run, tau_n[todo], guess[todo], np.ones(todo.sum(), bool), warm=True)
             _islands(run, tau_n[todo], *sub, np.minimum(guide_at(new), near)[todo], np.ones(todo.sum(), bool))
@@ -850,9 +875,51 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
         a_s, flip_s, chat_s = cat(a_s, a_n), cat(flip_s, f_n), cat(chat_s, c_n)
         dense = cat(dense, _is_dense(tau_n, f_max))
         ok = cat(ok, np.ones(new.size, bool))
+        settled = cat(settled, settled_n)
         tau = 60.0 / (teeth * samples)
         start = cat(start, guess)
     return samples, dense, ok, samples >= cutoff, a_s, flip_s, chat_s, tuple(warnings)
+
+
+def _window_setters(samples, a_s, ok, settled, grid) -> np.ndarray:
+    """The samples ``settled`` from below (their limit known to be at least ``a_s``) that could
+    hold the lowest of the windows (±DENSE_WINDOW) of the dense speeds ``grid`` [rpm]: those
+    under the lowest known for sure in a window (a computed sample's, or the line between two
+    at its edge; where that line runs from a settled sample, that sample too)."""
+    use = ok if ok.any() else np.ones(ok.size, bool)
+    fin = np.where(ok & np.isfinite(a_s), a_s, np.inf)
+    lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
+    hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")
+    edges = np.stack([grid * (1 - DENSE_WINDOW), grid * (1 + DENSE_WINDOW)])
+    value, below, above, _ = (x.reshape(edges.shape) for x in _line(samples, a_s, use, edges.ravel()))
+    redo = []
+    for i in range(grid.size):
+        inside = np.arange(lo_w[i], hi_w[i])
+        ends = [(value[k, i], below[k, i], above[k, i]) for k in range(2) if below[k, i] >= 0]
+        sure = min([fin[inside][~settled[inside]].min(initial=np.inf)]
+                   + [v for v, b, a in ends if not (settled[b] or settled[a])])
+        redo += list(inside[settled[inside] & (fin[inside] < sure)])
+        redo += [j for v, b, a in ends if v < sure for j in (b, a)]
+    redo = np.unique(np.array(redo, dtype=int))
+    return redo[settled[redo]]
+
+
+def _line(samples, a_s, use, at):
+    """Limits at speeds ``at`` [rpm] from the samples ``use``: linear in the tooth period between
+    them; across a jump the line would claim depths only the upper side has: the lower side
+    there. Returns (limits, the sample below and the sample above each, whether they jump)."""
+    idx = np.flatnonzero(use)
+    s_use, a_use = samples[idx], a_s[idx]
+    finite = np.isfinite(a_use)
+    cap = a_use[finite].max() * 1e3 if finite.any() else 1.0
+    out = np.interp(1.0 / at, 1.0 / s_use[::-1], np.where(finite, a_use, cap)[::-1])
+    if idx.size < 2:
+        none = np.full(np.shape(at), -1)
+        return out, none, none, np.zeros(np.shape(at), bool)
+    f_use = np.where(finite, a_use, np.inf)
+    gap = np.clip(np.searchsorted(s_use, at) - 1, 0, idx.size - 2)
+    at_jump = _jumps(s_use, f_use)[gap] & (at > s_use[gap]) & (at < s_use[gap + 1])
+    return np.where(at_jump, np.minimum(f_use[gap], f_use[gap + 1]), out), idx[gap], idx[gap + 1], at_jump
 
 
 def _vertex(x0, x1, x2, y0, y1, y2):
@@ -1188,24 +1255,10 @@ def _on_grid(speeds, samples, dense, ok, shown, a_s, flip_s, chat_s, warnings) -
         fl = np.full(grid.size, flip_s[0])
         ch = np.full(grid.size, chat_s[0])
     else:
-        inv_s, inv_g = 1.0 / samples, 1.0 / grid
-        big = np.where(np.isfinite(a_s) & ok, a_s, np.nan)
-        cap = np.nanmax(big) * 1e3 if np.isfinite(big).any() else 1.0
-        filled = np.where(np.isfinite(a_s), a_s, cap)
         use = ok if ok.any() else np.ones(ok.size, bool)  # speeds left to the ZOA take no part
-        s_use = samples[use]
-        f_use = np.where(np.isfinite(a_s[use]), a_s[use], np.inf)
-        jumps = _jumps(s_use, f_use) if s_use.size >= 2 else np.zeros(0, bool)
 
         def line(at):
-            """Linear in the tooth period between samples; across a jump the line would claim
-            depths only the upper side has: the lower side there."""
-            out = np.interp(1.0 / at, inv_s[use][::-1], filled[use][::-1])
-            if s_use.size >= 2:
-                gap = np.clip(np.searchsorted(s_use, at) - 1, 0, s_use.size - 2)
-                at_jump = jumps[gap] & (at > s_use[gap]) & (at < s_use[gap + 1])
-                out = np.where(at_jump, np.minimum(f_use[gap], f_use[gap + 1]), out)
-            return out
+            return _line(samples, a_s, use, at)[0]
 
         a = line(grid)
         near = np.clip(np.searchsorted(samples, grid), 0, samples.size - 1)
