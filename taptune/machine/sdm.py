@@ -124,8 +124,9 @@ DENSE_ROUNDS = 2
 #: the most compliant mode (whose lobes are the lowest).
 DENSE_PER_LOBE = 2
 #: Rounds (after the dense rounds) in which the samples settled from below that could hold a
-#: window's lowest are searched (:func:`_window_setters`).
-TIGHTEN_ROUNDS = 3
+#: window's lowest are searched (:func:`_window_setters`; one is enough: what is known for
+#: sure only goes down, and the settled samples only get fewer).
+TIGHTEN_ROUNDS = 1
 #: A batch of speeds spans node counts up to this ratio (fewer, larger batches: less overhead per step).
 GROUP_SPREAD = 1.25
 #: Work (units of :func:`_cost`) ``stability_lobes(method="auto")`` gives the semi-discretization (a few s of one core).
@@ -802,7 +803,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     # A sample settled from below (its limit known to be at least that) that gives a window its
     # lowest makes the window read shallower than it is (up to 30 % on a lobe's flank where
     # lobes just got denser than the window), and a run of them looks like a lobe's bottom to
-    # the dense rounds: those are searched before the dense rounds, and TIGHTEN_ROUNDS times after.
+    # the dense rounds: those are searched before the dense rounds and after them.
     rounds = (["extrema"] * REFINE_ROUNDS + ["jumps"] * JUMP_ROUNDS + ["dips", "extrema", "tighten"]
               + ["dense"] * DENSE_ROUNDS + ["tighten"] * TIGHTEN_ROUNDS)
     grid = speeds[_is_dense(60.0 / (teeth * speeds), f_max)]
@@ -828,6 +829,11 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             low = inner[dense[inner] & ok[inner] & (fin[inner] <= fin[inner - 1]) & (fin[inner] <= fin[inner + 1])
                         & np.isfinite(fin[inner])]
             new = np.concatenate([0.5 * (samples[low - 1] + samples[low]), 0.5 * (samples[low] + samples[low + 1])])
+            # an end sample lower than its neighbour: the lobe's bottom may lie between them
+            # (the samples reach a window past the grid's ends, so it may be in a window)
+            for end, nxt in ((0, 1), (samples.size - 1, samples.size - 2)):
+                if nxt >= 0 and end != nxt and dense[end] and ok[end] and np.isfinite(fin[end]) and fin[end] <= fin[nxt]:
+                    new = np.append(new, 0.5 * (samples[end] + samples[nxt]))
         else:
             redo = _window_setters(samples, a_s, ok, settled, grid) if grid.size else np.zeros(0, int)
             new = np.zeros(0)

@@ -218,7 +218,8 @@ def test_the_lowest_in_the_window_does_not_depend_on_where_the_grid_or_the_budge
     A speed alone and the ends of a grid had only the samples on their own side of the window:
     1,010 rpm alone read 5.59 mm where the grid 900-1,150 rpm reads 3.77 mm; a grid ending at
     2,750 rpm, just above where the lobes get that dense, read 4.02 mm at 2,740 rpm where
-    2,769.6 rpm chatters from 3.70 mm. The speeds just above where `auto`'s budget hands over
+    2,769.6 rpm chatters from 3.70 mm; a lobe's bottom between the last two samples was not
+    looked for (+5.8 % at 1,888 rpm). The speeds just above where `auto`'s budget hands over
     to the zero-order lobes keep their whole window too, computed in one process or two, and so
     do the speeds beside the seam between two processes."""
     from taptune.machine.lobes import zoa_lobes
@@ -256,6 +257,12 @@ def test_the_lowest_in_the_window_does_not_depend_on_where_the_grid_or_the_budge
     for grid in (np.array([2740.0]), np.array([2740.0, 2750.0]), np.arange(2600.0, 2750.0 + 1, 10.0)):
         part = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=grid, guide=guide, **TOOL3_CUT)
         assert at(part, 2740.0) <= 1.005 * at(ref, 2740.0), (grid, at(part, 2740.0) / MM, at(ref, 2740.0) / MM)
+    # a lobe's bottom between the last two samples, past the grid's end but inside its last
+    # windows (1,915 rpm, in the window of 1,888 rpm): 1,888 read 5.8 % too deep
+    grid = np.arange(1800.0, 1896.0 + 1, 4.0)
+    part = sdm_lobes(TOOL3_X, TOOL3_Y, rpm=grid, guide=guide, **TOOL3_CUT)
+    rho, _ = sdm_growth(TOOL3_X, TOOL3_Y, rpm=1915.0, depth=np.array([0.995 * at(part, 1888.0)]), **TOOL3_CUT)
+    assert rho[0] < 1.0, at(part, 1888.0) / MM
 
 
 def test_samples_settled_from_below_do_not_make_the_window_read_shallow():
