@@ -629,7 +629,8 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
     parts = []
     for k in range(workers):
         a, b = edges[k] * (1 - SEAM_OVERLAP if k else 1), edges[k + 1] * (1 + SEAM_OVERLAP if k < workers - 1 else 1)
-        parts.append((speeds[(speeds >= a) & (speeds <= b)], cutoff))
+        # (each samples its whole range: a grid with a gap at the seam still has its windows)
+        parts.append((speeds[(speeds >= a) & (speeds <= b)], cutoff, (a, b)))
     _PARTS = (modes_x, modes_y, guide, cut, parts)
     try:
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
@@ -650,11 +651,11 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
 
 def _sdm_part(k: int):
     modes_x, modes_y, guide, cut, parts = _PARTS
-    part, cutoff = parts[k]
+    part, cutoff, span = parts[k]
     if part.size == 0:
         return tuple(np.zeros(0, t) for t in (float, bool, bool, bool, float, bool, float)) + ((),)
-    return _sdm_samples(modes_x, modes_y, rpm=part, guide=guide, cutoff_rpm=cutoff, ends=(k == 0, k == len(parts) - 1),
-                        **cut)
+    return _sdm_samples(modes_x, modes_y, rpm=part, guide=guide, cutoff_rpm=cutoff, span=span,
+                        ends=(k == 0, k == len(parts) - 1), **cut)
 
 
 def _cost(modes_x, modes_y, samples, cut) -> np.ndarray:
@@ -716,7 +717,7 @@ def _sampled_range(lo: float, hi: float, teeth: int, f_max: float, ends=(True, T
 
 
 def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rpm, depth_cap, guide,
-                 budget=np.inf, cutoff_rpm=0.0, ends=(True, True)):
+                 budget=np.inf, cutoff_rpm=0.0, span=None, ends=(True, True)):
     """The sampled limits of :func:`sdm_lobes` (``rpm`` checked): (sample speeds, dense, ok,
     shown, limits, flip, chatter frequencies, warnings), for :func:`_on_grid`; ``shown`` is
     False for the samples below the budget's cut-off that only the window above it needs."""
@@ -725,7 +726,8 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
     geom = _geometry(teeth, ktc, krc, diameter, ae, milling)
     f_max = cols[1].max() / (2 * np.pi)
     f_res = _f_resolve(cols)
-    lo, hi = _sampled_range(float(speeds.min()), float(speeds.max()), teeth, f_max, ends)
+    lo, hi = span if span else (float(speeds.min()), float(speeds.max()))
+    lo, hi = _sampled_range(lo, hi, teeth, f_max, ends)
     if hi / lo - 1 < 1e-9:
         samples, dense = np.array([lo]), np.array([False])
     else:
@@ -733,6 +735,11 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
         if samples.size > speeds.size and not dense.any():  # never more work than the grid itself
             samples = np.unique(speeds)  # (where lobes are denser than the window, its lowest needs them all)
             dense = np.zeros(samples.size, bool)
+        if samples[0] < cutoff_rpm < samples[-1] and cutoff_rpm not in samples:
+            # a part of a range computed in parts: the whole range's cut-off is a sample, where
+            # one process has it (the speeds shown start there)
+            samples = np.sort(np.append(samples, cutoff_rpm))
+            dense = _is_dense(60.0 / (teeth * samples), f_max)
     tau = 60.0 / (teeth * samples)
     periods = geom[2] * tau * f_res
     ok = _nodes(periods) <= MAX_NODES
