@@ -827,8 +827,7 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
                                   & (samples[1:] / samples[:-1] - 1 > JUMP_WIDTH))
             new = 0.5 * (samples[jump] + samples[jump + 1])
         elif kind == "dips":  # a narrow dip between two samples that both sit above it
-            gap = np.flatnonzero(ok[:-1] & ok[1:] & ~dense[:-1] & ~dense[1:] & np.isfinite(fin[:-1])
-                                 & np.isfinite(fin[1:]))
+            gap = np.flatnonzero(ok[:-1] & ok[1:] & np.isfinite(fin[:-1]) & np.isfinite(fin[1:]))
             mid = 0.5 * (samples[gap] + samples[gap + 1])
             deep = DIP_RATIO * np.minimum(fin[gap], fin[gap + 1])
             new = mid[_growth(run, 60.0 / (teeth * mid), deep) >= 1.0] if gap.size else mid
