@@ -832,14 +832,12 @@ def _sdm_samples(modes_x, modes_y, *, teeth, ktc, krc, diameter, ae, milling, rp
             deep = DIP_RATIO * np.minimum(fin[gap], fin[gap + 1])
             new = mid[_growth(run, 60.0 / (teeth * mid), deep) >= 1.0] if gap.size else mid
         elif kind == "dense":
-            low = inner[dense[inner] & ok[inner] & (fin[inner] <= fin[inner - 1]) & (fin[inner] <= fin[inner + 1])
-                        & np.isfinite(fin[inner])]
-            new = np.concatenate([0.5 * (samples[low - 1] + samples[low]), 0.5 * (samples[low] + samples[low + 1])])
-            # an end sample lower than its neighbour: the lobe's bottom may lie between them
-            # (the samples reach a window past the grid's ends, so it may be in a window)
-            for end, nxt in ((0, 1), (samples.size - 1, samples.size - 2)):
-                if nxt >= 0 and end != nxt and dense[end] and ok[end] and np.isfinite(fin[end]) and fin[end] <= fin[nxt]:
-                    new = np.append(new, 0.5 * (samples[end] + samples[nxt]))
+            # (an end sample lower than its one neighbour counts: the samples reach a window past
+            # the grid's ends, so a lobe's bottom between the last two may lie in a window)
+            pad = np.concatenate([[np.inf], fin, [np.inf]])
+            low = np.flatnonzero(dense & ok & np.isfinite(fin) & (fin <= pad[:-2]) & (fin <= pad[2:]))
+            new = np.concatenate([0.5 * (samples[low[low > 0] - 1] + samples[low[low > 0]]),
+                                  0.5 * (samples[low[low < samples.size - 1]] + samples[low[low < samples.size - 1] + 1])])
         else:
             redo = _window_setters(samples, a_s, ok, settled, grid) if grid.size else np.zeros(0, int)
             new = np.zeros(0)
@@ -900,10 +898,8 @@ def _window_setters(samples, a_s, ok, settled, grid) -> np.ndarray:
     at its edge; where that line runs from a settled sample, that sample too)."""
     use = ok if ok.any() else np.ones(ok.size, bool)
     fin = np.where(ok & np.isfinite(a_s), a_s, np.inf)
-    lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
-    hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")
-    edges = np.stack([grid * (1 - DENSE_WINDOW), grid * (1 + DENSE_WINDOW)])
-    value, below, above, _ = (x.reshape(edges.shape) for x in _line(samples, a_s, use, edges.ravel()))
+    lo_w, hi_w, edges = _windows(samples, grid)
+    value, below, above, _ = _line(samples, a_s, use, edges)
     redo = []
     for i in range(grid.size):
         inside = np.arange(lo_w[i], hi_w[i])
@@ -914,6 +910,13 @@ def _window_setters(samples, a_s, ok, settled, grid) -> np.ndarray:
         redo += [j for v, b, a in ends if v < sure for j in (b, a)]
     redo = np.unique(np.array(redo, dtype=int))
     return redo[settled[redo]]
+
+
+def _windows(samples, grid):
+    """The samples within ±DENSE_WINDOW of each speed of ``grid`` [rpm] (from, to: index
+    ranges) and the windows' edges [rpm], shape (2, grid.size)."""
+    edges = np.stack([grid * (1 - DENSE_WINDOW), grid * (1 + DENSE_WINDOW)])
+    return np.searchsorted(samples, edges[0], "left"), np.searchsorted(samples, edges[1], "right"), edges
 
 
 def _line(samples, a_s, use, at):
@@ -1281,10 +1284,9 @@ def _on_grid(speeds, samples, dense, ok, shown, a_s, flip_s, chat_s, warnings) -
         inf_near = ~np.isfinite(a_s[near])
         a = np.where(inf_near, np.inf, a)
         if dense.any():
-            lo_w = np.searchsorted(samples, grid * (1 - DENSE_WINDOW), "left")
-            hi_w = np.searchsorted(samples, grid * (1 + DENSE_WINDOW), "right")
+            lo_w, hi_w, ends = _windows(samples, grid)
             # On a steep flank the lowest lies at the window's edge, between samples.
-            edges = np.minimum(line(grid * (1 - DENSE_WINDOW)), line(grid * (1 + DENSE_WINDOW)))
+            edges = line(ends).min(axis=0)
             in_dense = dense[near]
             lo_w = np.minimum(lo_w, samples.size - 1)
             for i in np.flatnonzero(in_dense):  # the lowest in the window, with its kind and frequency
