@@ -22,6 +22,8 @@ import multiprocessing as mp
 import os
 import re
 from collections import deque
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from taptune.library.schema import SCHEMA
@@ -168,22 +170,33 @@ def parallel_holders(path: str | os.PathLike, processes: int, row):
     except LibraryFormatError as err:
         raise NotParallel(str(err)) from None
     names: set[str] = set()
-    ctx = mp.get_context("spawn")  # fresh interpreters: nothing of the open database is shared
-    with ctx.Pool(processes) as pool:
+    # concurrent.futures, not multiprocessing.Pool: leaving early (a duplicate name, a bad
+    # holder) must stop the workers without killing them mid-result. Pool.terminate()
+    # SIGTERMs workers and can then wait forever on a queue lock a killed worker held
+    # (CPython issues 73945, 96995); it hung a CI run. shutdown() here lets the piece in
+    # hand finish and drops the queued ones. A worker that dies makes the pool broken:
+    # the serial reader takes over.
+    pool = ProcessPoolExecutor(processes, mp_context=mp.get_context("spawn"))  # fresh interpreters: no open database shared
+    try:
         queue: deque = deque()
         jobs = iter(enumerate(ranges))
         # A few pieces in flight per worker: memory stays bounded when writing is slower.
         for i, (a, b) in jobs:
-            queue.append(pool.apply_async(decode_piece, (path, a, b, i == len(ranges) - 1, row)))
+            queue.append(pool.submit(decode_piece, path, a, b, i == len(ranges) - 1, row))
             if len(queue) >= 3 * processes:
                 break
         while queue:
-            holders = queue.popleft().get()
+            try:
+                holders = queue.popleft().result()
+            except BrokenProcessPool as err:
+                raise NotParallel(f"a worker stopped: {err}") from None
             for i, (a, b) in jobs:
-                queue.append(pool.apply_async(decode_piece, (path, a, b, i == len(ranges) - 1, row)))
+                queue.append(pool.submit(decode_piece, path, a, b, i == len(ranges) - 1, row))
                 break
             for name, *_ in holders:
                 if name in names:
                     raise NotParallel(f"duplicate holder {name!r}")
                 names.add(name)
             yield holders
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

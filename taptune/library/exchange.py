@@ -19,6 +19,7 @@ work on entries and files; those given a library (``lib``) use only its ``target
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import itertools
@@ -443,8 +444,9 @@ def _import_parallel(lib, file, replace: bool, processes: int) -> ImportReport:
     is decoded again here and merged as the serial import merges it.
     """
     parts: list[ImportReport] = []
-    with lib._transaction() as tx:
-        for holders in bulk.parallel_holders(file, processes, tx.row):
+    # closing(): a refused holder stops the workers now, not when the traceback is freed.
+    with lib._transaction() as tx, contextlib.closing(bulk.parallel_holders(file, processes, tx.row)) as pieces:
+        for holders in pieces:
             current = tx.load_many(sorted(name for name, *_ in holders))
             rows, added, known = [], [], {}
             for name, document, row, hashes, warned in holders:

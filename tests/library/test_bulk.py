@@ -69,3 +69,29 @@ def test_a_name_twice_in_different_pieces_is_refused(db, tmp_path, parallel):
     with pytest.raises(LibraryFormatError, match="duplicate key 'H01'"):
         db.import_file(tmp_path / "twice.json")
     assert db.names() == []
+
+
+def _worker_dies(entry, document):
+    """A ``row`` function that ends its worker process (as the kernel's OOM killer would)."""
+    import os
+
+    os._exit(1)
+
+
+def test_a_worker_that_dies_hands_over_to_the_serial_reader_without_hanging(tmp_path):
+    _, path = export(tmp_path)
+    pieces = bulk.parallel_holders(path, 2, _worker_dies)
+    with pytest.raises(bulk.NotParallel, match="a worker stopped"):
+        next(pieces)
+
+
+def test_leaving_early_with_pieces_in_flight_stops_every_worker(tmp_path, monkeypatch):
+    import multiprocessing
+
+    monkeypatch.setattr(bulk, "PIECE_BYTES", 1000)
+    _, path = export(tmp_path, n=40)
+    before = set(multiprocessing.active_children())  # other tests' pools, if any
+    pieces = bulk.parallel_holders(path, 2, entry_row)
+    assert next(pieces)
+    pieces.close()  # as a refused holder in the consumer does: queued pieces dropped, workers joined
+    assert set(multiprocessing.active_children()) <= before
