@@ -26,6 +26,7 @@ import pickle
 import signal
 import tempfile
 import threading
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -302,9 +303,18 @@ class WarmPool:
         self.pool = ctx.Pool(self.processes, initializer=_join_warm_pool, initargs=(self.counts, self.cancel))
         self.warming = self.pool.map_async(_warm_up, range(self.processes), chunksize=1)
 
-    def close(self) -> None:
-        """Stop the workers (a running identification is cancelled)."""
+    def close(self, timeout: float = 5.0) -> None:
+        """Stop the workers (a running identification is cancelled).
+
+        The warm-up and a cancelled identification's tasks get up to ``timeout`` s to
+        return first: Pool.terminate() on a worker that is writing its result can wait
+        forever on the lock that worker held (CPython issue 96995).
+        """
         self.cancel.set()
+        deadline = time.monotonic() + timeout
+        self.warming.wait(timeout)
+        if self.lock.acquire(timeout=max(0.0, deadline - time.monotonic())):
+            self.lock.release()
         self.pool.terminate()
         self.pool.join()
 
@@ -356,6 +366,7 @@ class Workers:
         self.progress = progress
         self.phase = (0.05, 0.75, "fitting the model")
         self.pool = None
+        self.pending = None  # the phase running on workers
         if self.warm:
             self.warm.lock.acquire()
             self.warm.cancel.clear()
@@ -397,6 +408,7 @@ class Workers:
                 pending = self.warm.pool.map_async(_remote, [(fn, self.key, self.path, i) for i in items], chunksize=1)
             else:
                 pending = self.pool.map_async(fn, items, chunksize=1)
+            self.pending = pending
             while not pending.ready():
                 pending.wait(0.05)
                 self.report()
@@ -409,6 +421,12 @@ class Workers:
         return self
 
     def __exit__(self, *exc):
+        if self.pending is not None and not self.pending.ready():
+            # Left mid-phase (Ctrl-C, an error): the tasks stop at their next generation and
+            # return before the workers are stopped or handed on; terminate() on a worker
+            # writing its result can hang (CPython issue 96995).
+            self.cancel.set()
+            self.pending.wait(10.0)
         if self.warm is not None:
             try:
                 os.unlink(self.path)

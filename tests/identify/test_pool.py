@@ -158,3 +158,28 @@ def test_workers_leave_ctrl_c_to_the_parent(warm_pool):
     with search.Workers(None, options) as forked:  # the CLI's pool, forked per identification
         assert forked.pool.apply(signal.getsignal, (signal.SIGINT,)) == signal.SIG_IGN
     assert warm_pool.pool.apply(signal.getsignal, (signal.SIGINT,)) == signal.SIG_IGN
+
+
+def _until_cancelled(_):
+    """A task that runs until the identification is cancelled (a GA island checks each generation)."""
+    import time
+
+    deadline = time.monotonic() + 20
+    while not search.STATE["cancel"].is_set() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return search.STATE["cancel"].is_set()
+
+
+def test_leaving_mid_phase_cancels_the_tasks_and_lets_them_return():
+    """Ctrl-C (or an error) while tasks run: they are cancelled and return before the workers
+    are stopped. Stopping a worker while it writes its result can hang the pool for good."""
+    from types import SimpleNamespace
+
+    def interrupt(fraction, message):
+        raise KeyboardInterrupt
+
+    options = SimpleNamespace(jobs=2, islands=2, ga=SimpleNamespace(generations=1))
+    with pytest.raises(KeyboardInterrupt):
+        with search.Workers(None, options, progress=interrupt) as forked:
+            forked.map(_until_cancelled, range(2))
+    assert forked.pending.ready() and forked.pending.get() == [True, True]
