@@ -186,10 +186,7 @@ def parallel_holders(path: str | os.PathLike, processes: int, row):
             if len(queue) >= 3 * processes:
                 break
         while queue:
-            try:
-                holders = queue.popleft().result()
-            except BrokenProcessPool as err:
-                raise NotParallel(f"a worker stopped: {err}") from None
+            holders = queue.popleft().result()
             for i, (a, b) in jobs:
                 queue.append(pool.submit(decode_piece, path, a, b, i == len(ranges) - 1, row))
                 break
@@ -198,5 +195,7 @@ def parallel_holders(path: str | os.PathLike, processes: int, row):
                     raise NotParallel(f"duplicate holder {name!r}")
                 names.add(name)
             yield holders
+    except BrokenProcessPool as err:  # from result() or submit()
+        raise NotParallel(f"a worker stopped: {err}") from None
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
