@@ -18,6 +18,7 @@ from tests.conftest import REPO
 # Rank of each room; a module may import only its own rank or lower.
 RANK = {
     "errors": 0,
+    "workers": 0,  # what every worker pool shares
     "io": 1,
     "signal": 2,
     "model": 3,

@@ -10,7 +10,6 @@ milliseconds with everything imported) and report progress and their
 from __future__ import annotations
 
 import multiprocessing as mp
-import signal
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -21,12 +20,12 @@ from typing import Callable
 from taptune.batch.job import run_job
 from taptune.batch.outputs import log_error
 from taptune.batch.records import BatchOptions, Outcome, one_line, rows_for
+from taptune.workers import ignore_interrupt
 
 
 def _worker_main(items, options: BatchOptions, conn) -> None:
     """Body of a worker process: run one job and send ("progress", f)… then ("done", Outcome)."""
-    # Ctrl-C reaches the whole process group; the parent decides and terminates workers.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    ignore_interrupt()  # the parent decides and terminates workers
     last = [-1.0]
 
     def progress(fraction, message=""):

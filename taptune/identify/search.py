@@ -23,7 +23,6 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import pickle
-import signal
 import tempfile
 import threading
 import time
@@ -32,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from taptune.identify.objective import Objective
+from taptune.workers import ignore_interrupt
 from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish_least_squares
 from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms
 from taptune.model.params import NAMES, unit_to_p
@@ -220,19 +220,16 @@ class _ProgressFlag:
         return self.flag.is_set()
 
 
+#: Seconds a cancelled phase's tasks get to return before their workers are stopped anyway.
+TASKS_STOP_S = 10.0
+
 #: Progress slots of a warm pool (one per island; more islands share slots).
 _SLOTS = 64
 
 
-def _ignore_interrupt() -> None:
-    """Initializer of a worker: Ctrl-C is the parent's to handle (it cancels and stops the
-    pool); a worker taking it too printed its own KeyboardInterrupt traceback."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def _join_warm_pool(counts, cancel) -> None:
     """Initializer of a :class:`WarmPool` worker: the shared progress slots and cancel flag."""
-    _ignore_interrupt()
+    ignore_interrupt()
     STATE.update(counts=counts, cancel=cancel, key=None)
 
 
@@ -303,7 +300,7 @@ class WarmPool:
         self.pool = ctx.Pool(self.processes, initializer=_join_warm_pool, initargs=(self.counts, self.cancel))
         self.warming = self.pool.map_async(_warm_up, range(self.processes), chunksize=1)
 
-    def close(self, timeout: float = 5.0) -> None:
+    def close(self, timeout: float = TASKS_STOP_S + 5.0) -> None:
         """Stop the workers (a running identification is cancelled).
 
         The warm-up and a cancelled identification's tasks get up to ``timeout`` s to
@@ -384,7 +381,7 @@ class Workers:
         self.cancel = self.ctx.Event() if self.ctx else _LocalFlag()
         STATE.update(objective=objective, options=options, counts=self.counts,
                      cancel=self.cancel if self.ctx else _ProgressFlag(self.report, self.cancel))
-        self.pool = self.ctx.Pool(jobs, initializer=_ignore_interrupt) if self.ctx else None
+        self.pool = self.ctx.Pool(jobs, initializer=ignore_interrupt) if self.ctx else None
 
     def report(self) -> None:
         base, span, message = self.phase
@@ -421,22 +418,29 @@ class Workers:
         return self
 
     def __exit__(self, *exc):
-        if self.pending is not None and not self.pending.ready():
-            # Left mid-phase (Ctrl-C, an error): the tasks stop at their next generation and
-            # return before the workers are stopped or handed on; terminate() on a worker
-            # writing its result can hang (CPython issue 96995).
-            self.cancel.set()
-            self.pending.wait(10.0)
-        if self.warm is not None:
-            try:
-                os.unlink(self.path)
-            except OSError:
-                pass
-            self.warm.lock.release()
-            return False
-        if self.pool is not None:
-            self.pool.terminate()
-        STATE.clear()
+        settled = self.pending is None or self.pending.ready()
+        try:
+            if not settled:
+                # Left mid-phase (Ctrl-C, an error): the tasks stop at their next generation and
+                # return before the workers are stopped or handed on; terminate() on a worker
+                # writing its result can hang (CPython issue 96995).
+                self.cancel.set()
+                self.pending.wait(TASKS_STOP_S)
+                settled = self.pending.ready()
+        finally:
+            if self.warm is not None:
+                try:
+                    os.unlink(self.path)
+                except OSError:
+                    pass
+                self.warm.lock.release()
+            else:
+                if self.pool is not None and settled:  # every worker idle: stopped without a signal
+                    self.pool.close()
+                    self.pool.join()
+                elif self.pool is not None:
+                    self.pool.terminate()
+                STATE.clear()
         return False
 
 

@@ -27,6 +27,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from taptune.library.schema import SCHEMA
+from taptune.workers import ignore_interrupt
 
 #: Bytes of export per piece a worker decodes (≈ 600 holders of a 9 KB holder).
 PIECE_BYTES = 4 << 20
@@ -173,10 +174,11 @@ def parallel_holders(path: str | os.PathLike, processes: int, row):
     # concurrent.futures, not multiprocessing.Pool: leaving early (a duplicate name, a bad
     # holder) must stop the workers without killing them mid-result. Pool.terminate()
     # SIGTERMs workers and can then wait forever on a queue lock a killed worker held
-    # (CPython issues 73945, 96995); it hung a CI run. shutdown() here lets the piece in
-    # hand finish and drops the queued ones. A worker that dies makes the pool broken:
-    # the serial reader takes over.
-    pool = ProcessPoolExecutor(processes, mp_context=mp.get_context("spawn"))  # fresh interpreters: no open database shared
+    # (CPython issues 73945, 96995); it hung a CI run. shutdown() here lets the pieces
+    # already handed to workers (about two per worker) finish and drops the rest. A worker
+    # that dies makes the pool broken: the serial reader takes over. The workers are fresh
+    # interpreters (nothing of the open database is shared) that leave Ctrl-C to this process.
+    pool = ProcessPoolExecutor(processes, mp_context=mp.get_context("spawn"), initializer=ignore_interrupt)
     try:
         queue: deque = deque()
         jobs = iter(enumerate(ranges))

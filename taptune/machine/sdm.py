@@ -617,6 +617,8 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
+    from taptune.workers import ignore_interrupt
+
     global _PARTS
     lo, hi = float(speeds.min()), float(speeds.max())
     cols = _modal(modes_x, modes_y)
@@ -633,7 +635,7 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
         parts.append((speeds[(speeds >= a) & (speeds <= b)], cutoff, (a, b)))
     _PARTS = (modes_x, modes_y, guide, cut, parts)
     try:
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"), initializer=ignore_interrupt) as pool:
             out = list(pool.map(_sdm_part, range(workers)))
     finally:
         _PARTS = None

@@ -170,16 +170,27 @@ def _until_cancelled(_):
     return search.STATE["cancel"].is_set()
 
 
-def test_leaving_mid_phase_cancels_the_tasks_and_lets_them_return():
+@pytest.mark.parametrize("kind", ["forked", "warm"])
+def test_leaving_mid_phase_cancels_the_tasks_and_lets_them_return(kind, request):
     """Ctrl-C (or an error) while tasks run: they are cancelled and return before the workers
-    are stopped. Stopping a worker while it writes its result can hang the pool for good."""
+    are stopped or handed on. Stopping a worker while it writes its result can hang the pool
+    for good."""
     from types import SimpleNamespace
 
     def interrupt(fraction, message):
         raise KeyboardInterrupt
 
+    warm = request.getfixturevalue("warm_pool") if kind == "warm" else None
     options = SimpleNamespace(jobs=2, islands=2, ga=SimpleNamespace(generations=1))
-    with pytest.raises(KeyboardInterrupt):
-        with search.Workers(None, options, progress=interrupt) as forked:
-            forked.map(_until_cancelled, range(2))
-    assert forked.pending.ready() and forked.pending.get() == [True, True]
+    search.set_shared_pool(warm)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with search.Workers(None, options, progress=interrupt) as workers:
+                assert (workers.warm is warm) and ((workers.pool is None) == (kind == "warm"))
+                workers.map(_until_cancelled, range(2))
+    finally:
+        search.set_shared_pool(None)
+    assert workers.pending.ready() and workers.pending.get() == [True, True]
+    if warm is not None:  # handed on: the next identification may start
+        assert warm.lock.acquire(timeout=1)
+        warm.lock.release()

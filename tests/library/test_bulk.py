@@ -95,3 +95,17 @@ def test_leaving_early_with_pieces_in_flight_stops_every_worker(tmp_path, monkey
     assert next(pieces)
     pieces.close()  # as a refused holder in the consumer does: queued pieces dropped, workers joined
     assert set(multiprocessing.active_children()) <= before
+
+
+def _sigint_row(entry, document):
+    """A ``row`` function that reports whether its worker leaves Ctrl-C to the parent."""
+    import signal
+
+    return (signal.getsignal(signal.SIGINT) == signal.SIG_IGN,), document, []
+
+
+def test_workers_leave_ctrl_c_to_the_parent(tmp_path):
+    """A worker interrupted while sending a piece left half a message in the pipe: the import hung."""
+    _, path = export(tmp_path)
+    rows = [row for holders in bulk.parallel_holders(path, 2, _sigint_row) for _, _, row, _, _ in holders]
+    assert len(rows) == 12 and all(ignored for ignored, in rows)
