@@ -614,11 +614,6 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
     computed across it. One fork and no
     exchange between the parts: the phases of one range (neighbours guess each other's
     limits, islands, jumps, lobe bottoms) run without waiting for the others."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    from taptune.workers import ignore_interrupt
-
     global _PARTS
     lo, hi = float(speeds.min()), float(speeds.max())
     cols = _modal(modes_x, modes_y)
@@ -635,8 +630,7 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
         parts.append((speeds[(speeds >= a) & (speeds <= b)], cutoff, (a, b)))
     _PARTS = (modes_x, modes_y, guide, cut, parts)
     try:
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"), initializer=ignore_interrupt) as pool:
-            out = list(pool.map(_sdm_part, range(workers)))
+        out = _forked(_sdm_part, workers)
     finally:
         _PARTS = None
     # Each part's own side of the seams, and its computed samples across them (a lobe's narrow
@@ -649,6 +643,60 @@ def _sdm_parts(modes_x, modes_y, speeds, guide, cutoff, cut, workers, samples, w
     merged = [x[order][first] for x in merged]
     warnings = tuple(dict.fromkeys(w for o in out for w in o[7]))
     return (*merged, warnings)
+
+
+def _forked(fn, n: int) -> list:
+    """``[fn(0), …, fn(n − 1)]``, each in a forked process of its own that sends its result
+    (or its exception) through a pipe of its own.
+
+    Plain processes, not a pool: on Ctrl-C (which the children leave to this process) or an
+    error they are stopped at once, and with no queue shared between them a child stopped
+    mid-message cannot leave a lock or half a message that this process waits on for ever.
+    """
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    running = []
+    settled = False
+    try:
+        for k in range(n):
+            receive, send = ctx.Pipe(duplex=False)
+            child = ctx.Process(target=_send_result, args=(fn, k, send), daemon=True)
+            child.start()
+            send.close()
+            running.append((child, receive))
+        out = []
+        for child, receive in running:
+            try:
+                ok, value = receive.recv()
+            except EOFError:
+                child.join()
+                raise RuntimeError(f"a semi-discretization process ended without its result "
+                                   f"(exit code {child.exitcode})") from None
+            if not ok:
+                raise value
+            out.append(value)
+        settled = True
+        return out
+    finally:
+        for child, receive in running:
+            if not settled and child.is_alive():
+                child.terminate()
+            child.join()
+            receive.close()
+
+
+def _send_result(fn, k: int, send) -> None:
+    """Body of a :func:`_forked` child: (True, fn(k)) or (False, its exception) into ``send``."""
+    from taptune.workers import ignore_interrupt
+
+    ignore_interrupt()
+    try:
+        result = (True, fn(k))
+    except Exception as err:  # noqa: BLE001 - raised again in the parent
+        result = (False, err)
+    send.send(result)
+    send.close()
 
 
 def _sdm_part(k: int):

@@ -414,3 +414,32 @@ def test_holder_from_the_library_is_read_only_and_equals_its_params(tmp_path, ca
     a, b = (json.loads((tmp_path / n).read_text())["predictions"][0] for n in ("lib.json.out", "params.json.out"))
     np.testing.assert_allclose(complex_of(a["x"]), complex_of(b["x"]), rtol=1e-9)
     assert library.read_bytes() == before
+
+
+@pytest.mark.skipif(not hasattr(__import__("signal"), "SIGKILL"), reason="needs POSIX signals")
+def test_ctrl_c_during_the_semi_discretization_ends_at_once_in_one_line():
+    """Ctrl-C reaches the whole process group, the lobes' forked processes too: they leave it
+    to the command, which stops them and says so in one line (exit 130), at once."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(REPO))
+    proc = subprocess.Popen([sys.executable, "-m", "taptune", "lobes", str(RECORDINGS / "er32_d16.toml"),
+                             "--params", str(RECORDINGS / "er32_d16.params.json"),
+                             "--machine", str(RECORDINGS / "machine" / "machine.toml"), "--material", "al6082",
+                             "--teeth", "4", "--ae", "8", "--milling", "down", "--method", "sdm"],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        time.sleep(2.0)  # imports done, the speed ranges' processes computing (about 7 s in all)
+        assert proc.poll() is None
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=5)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130 and err.strip() == "taptune lobes: interrupted"

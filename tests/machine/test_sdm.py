@@ -331,3 +331,26 @@ def test_a_single_speed_left_to_the_zero_order_lobes_is_not_called_stable():
     full = stability_lobes(f, TOOL3_X.frf(f), TOOL3_Y.frf(f), rpm=np.array([300.0]), method="sdm",
                            modes=(TOOL3_X, TOOL3_Y), **TOOL3_CUT)
     assert np.isfinite(full.a_lim[0])  # the zero-order limit, with the warning
+
+
+def _part_or_error(k):
+    if k == 1:
+        raise InputError("part 1 cannot be computed")
+    return k * k
+
+
+def test_forked_parts_return_in_order_raise_what_a_part_raised_and_leave_no_process():
+    """The speed ranges' processes (sdm._forked): results in order; a part's exception is
+    raised here as it was; a process that dies is an error, not a wait for ever."""
+    import multiprocessing
+    import os
+
+    from taptune.machine import sdm
+
+    before = set(multiprocessing.active_children())
+    assert sdm._forked(lambda k: k * k, 3) == [0, 1, 4]
+    with pytest.raises(InputError, match="part 1 cannot"):
+        sdm._forked(_part_or_error, 3)
+    with pytest.raises(RuntimeError, match=r"ended without its result \(exit code 3\)"):
+        sdm._forked(lambda k: os._exit(3), 2)
+    assert set(multiprocessing.active_children()) <= before
