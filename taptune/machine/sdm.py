@@ -84,7 +84,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from taptune.errors import InputError
+from taptune.errors import InputError, TaptuneError
 from taptune.machine.engagement import engagement_angles
 
 #: Steps per period of the fastest mode in the active part of a tooth period.
@@ -671,7 +671,8 @@ def _forked(fn, n: int) -> list:
                 ok, value = receive.recv()
             except EOFError:
                 child.join()
-                raise RuntimeError(f"a semi-discretization process ended without its result "
+                # Killed (out of memory, say): one line, not a traceback.
+                raise TaptuneError(f"a semi-discretization process ended without its result "
                                    f"(exit code {child.exitcode})") from None
             if not ok:
                 raise value

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from taptune.machine import stability_lobes
-from taptune.errors import InputError
+from taptune.errors import InputError, TaptuneError
 from taptune.machine.sdm import sdm_growth, sdm_lobes
 from taptune.machine.simulate import ModalSet, simulate_milling
 
@@ -351,6 +351,6 @@ def test_forked_parts_return_in_order_raise_what_a_part_raised_and_leave_no_proc
     assert sdm._forked(lambda k: k * k, 3) == [0, 1, 4]
     with pytest.raises(InputError, match="part 1 cannot"):
         sdm._forked(_part_or_error, 3)
-    with pytest.raises(RuntimeError, match=r"ended without its result \(exit code 3\)"):
+    with pytest.raises(TaptuneError, match=r"ended without its result \(exit code 3\)"):
         sdm._forked(lambda k: os._exit(3), 2)
     assert set(multiprocessing.active_children()) <= before
