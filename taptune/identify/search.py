@@ -31,10 +31,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from taptune.identify.objective import Objective
-from taptune.workers import ignore_interrupt
 from taptune.identify.optimize import Archive, Cancelled, genetic_algorithm, polish_least_squares
 from taptune.identify.uncertainty import SetLimits, set_extreme, summed_terms
 from taptune.model.params import NAMES, unit_to_p
+from taptune.workers import ignore_interrupt
 
 STATE: dict = {}
 
@@ -435,11 +435,12 @@ class Workers:
                     pass
                 self.warm.lock.release()
             else:
-                if self.pool is not None and settled:  # every worker idle: stopped without a signal
-                    self.pool.close()
-                    self.pool.join()
-                elif self.pool is not None:
-                    self.pool.terminate()
+                if self.pool is not None:
+                    if settled:  # every worker idle: stopped without a signal
+                        self.pool.close()
+                        self.pool.join()
+                    else:
+                        self.pool.terminate()
                 STATE.clear()
         return False
 

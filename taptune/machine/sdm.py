@@ -86,6 +86,7 @@ import numpy as np
 
 from taptune.errors import InputError, TaptuneError
 from taptune.machine.engagement import engagement_angles
+from taptune.workers import ignore_interrupt
 
 #: Steps per period of the fastest mode in the active part of a tooth period.
 STEPS_PER_MODE = 24
@@ -689,8 +690,6 @@ def _forked(fn, n: int) -> list:
 
 def _send_result(fn, k: int, send) -> None:
     """Body of a :func:`_forked` child: (True, fn(k)) or (False, its exception) into ``send``."""
-    from taptune.workers import ignore_interrupt
-
     ignore_interrupt()
     try:
         result = (True, fn(k))
